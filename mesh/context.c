@@ -1,0 +1,154 @@
+/*
+ * mesh/context.c -- status codes, the error context, logging, timing and
+ * atomic output files.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "mesh.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+const char *pz_status_str(pz_status status)
+{
+    switch (status) {
+    case PZ_OK: return "ok";
+    case PZ_ERR_USAGE: return "usage error";
+    case PZ_ERR_DATA: return "bad input data";
+    case PZ_ERR_INVALID_MESH: return "invalid mesh";
+    case PZ_ERR_OPEN: return "cannot open input";
+    case PZ_ERR_CREATE: return "cannot create output";
+    case PZ_ERR_NOMEM: return "out of memory";
+    case PZ_ERR_INTERNAL: return "internal error";
+    }
+    return "unknown status";
+}
+
+int pz_status_exit_code(pz_status status)
+{
+    switch (status) {
+    case PZ_OK: return 0;
+    case PZ_ERR_USAGE: return 64;          /* EX_USAGE */
+    case PZ_ERR_DATA:
+    case PZ_ERR_INVALID_MESH: return 65;   /* EX_DATAERR */
+    case PZ_ERR_OPEN: return 66;           /* EX_NOINPUT */
+    case PZ_ERR_CREATE: return 73;         /* EX_CANTCREAT */
+    case PZ_ERR_NOMEM:
+    case PZ_ERR_INTERNAL: return 70;       /* EX_SOFTWARE */
+    }
+    return 70;
+}
+
+void pz_ctx_init(pz_ctx *ctx)
+{
+    memset(ctx, 0, sizeof *ctx);
+}
+
+pz_status pz_error(pz_ctx *ctx, pz_status status, const char *fmt, ...)
+{
+    if (!ctx)
+        return status;
+    va_list args;
+    va_start(args, fmt);
+    vsnprintf(ctx->error, sizeof ctx->error, fmt, args);
+    va_end(args);
+    /* The message must stay one line whatever a file name or a parser put in it. */
+    for (char *c = ctx->error; *c; ++c)
+        if (*c == '\n' || *c == '\r')
+            *c = ' ';
+    return status;
+}
+
+void pz_note(pz_ctx *ctx, const char *fmt, ...)
+{
+    if (ctx && ctx->quiet)
+        return;
+    va_list args;
+    va_start(args, fmt);
+    fputs("panelize: ", stderr);
+    vfprintf(stderr, fmt, args);
+    fputc('\n', stderr);
+    va_end(args);
+}
+
+double pz_seconds(void)
+{
+    struct timespec now;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
+}
+
+static char *duplicate_string(const char *text)
+{
+    size_t length = strlen(text);
+    char *copy = malloc(length + 1);
+    if (copy)
+        memcpy(copy, text, length + 1);
+    return copy;
+}
+
+pz_status pz_output_open(pz_output *out, const char *path, const char *mode, pz_ctx *ctx)
+{
+    memset(out, 0, sizeof *out);
+    size_t tmp_size = strlen(path) + 32;
+    out->path = duplicate_string(path);
+    out->tmp_path = malloc(tmp_size);
+    if (!out->path || !out->tmp_path) {
+        free(out->path);
+        free(out->tmp_path);
+        memset(out, 0, sizeof *out);
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", path);
+    }
+    snprintf(out->tmp_path, tmp_size, "%s.tmp-%ld", path, (long)getpid());
+    out->file = fopen(out->tmp_path, mode);
+    if (!out->file) {
+        int saved = errno;
+        free(out->path);
+        free(out->tmp_path);
+        memset(out, 0, sizeof *out);
+        return pz_error(ctx, PZ_ERR_CREATE, "%s: cannot create: %s", path, strerror(saved));
+    }
+    return PZ_OK;
+}
+
+pz_status pz_output_commit(pz_output *out, pz_ctx *ctx)
+{
+    int failed = ferror(out->file);
+    int saved = errno;
+    if (fclose(out->file) != 0 && !failed) {
+        failed = 1;
+        saved = errno;
+    }
+    out->file = NULL;
+    if (!failed && rename(out->tmp_path, out->path) != 0) {
+        failed = 1;
+        saved = errno;
+    }
+    pz_status status = PZ_OK;
+    if (failed) {
+        status = pz_error(ctx, PZ_ERR_CREATE, "%s: cannot write: %s", out->path, strerror(saved));
+        remove(out->tmp_path);
+    }
+    free(out->path);
+    free(out->tmp_path);
+    out->path = out->tmp_path = NULL;
+    return status;
+}
+
+void pz_output_abort(pz_output *out)
+{
+    if (out->file) {
+        fclose(out->file);
+        out->file = NULL;
+    }
+    if (out->tmp_path)
+        remove(out->tmp_path);
+    free(out->path);
+    free(out->tmp_path);
+    out->path = out->tmp_path = NULL;
+}

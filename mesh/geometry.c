@@ -1,0 +1,160 @@
+/*
+ * mesh/geometry.c -- per-face and per-vertex quantities of the rest pose:
+ * areas, normals, corner angles, cotangent weights, angle defect and the
+ * developability error.
+ *
+ * Robustness. Corner angles are atan2(|u x w|, u . w), accurate for angles
+ * near 0 and pi where acos(u . w / (|u||w|)) loses half its digits (and can
+ * be fed a ratio slightly above 1). A cotangent is (u . w) / |u x w|; a
+ * degenerate face (|u x w| = 0) contributes 0 to a cotangent weight rather
+ * than an infinity, and has a zero normal.
+ *
+ * Curvature. The angle defect is 2 pi - sum of the angles at an interior
+ * vertex (pi - sum at a boundary vertex): the discrete Gaussian curvature
+ * integrated over the vertex's area, whose sum over a closed surface is
+ * 2 pi chi (Gauss-Bonnet). The developability error of wang2008 (Eq. 25) is
+ * |sum - 2 pi| at interior vertices and 0 on the boundary, where a fan of
+ * faces can always be flattened. Isolated vertices get 0 in both.
+ *
+ * Nothing here allocates or fails; preconditions: faces index valid
+ * vertices, and the topology (where taken) was built from this mesh.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "mesh.h"
+
+#include <math.h>
+#include <string.h>
+
+static const double PZ_PI = 3.14159265358979323846;
+
+static void subtract3(const double *a, const double *b, double *out)
+{
+    out[0] = a[0] - b[0];
+    out[1] = a[1] - b[1];
+    out[2] = a[2] - b[2];
+}
+
+static void cross3(const double *u, const double *w, double *out)
+{
+    out[0] = u[1] * w[2] - u[2] * w[1];
+    out[1] = u[2] * w[0] - u[0] * w[2];
+    out[2] = u[0] * w[1] - u[1] * w[0];
+}
+
+static double dot3(const double *u, const double *w) { return u[0] * w[0] + u[1] * w[1] + u[2] * w[2]; }
+
+static double norm3(const double *u) { return sqrt(dot3(u, u)); }
+
+/* Twice-area vector of face f: (p1 - p0) x (p2 - p0). */
+static void face_cross(const pz_mesh *mesh, int32_t f, double *out)
+{
+    const int32_t *corner = mesh->faces + 3 * f;
+    double u[3], w[3];
+    subtract3(mesh->positions + 3 * corner[1], mesh->positions + 3 * corner[0], u);
+    subtract3(mesh->positions + 3 * corner[2], mesh->positions + 3 * corner[0], w);
+    cross3(u, w, out);
+}
+
+/* The edge vectors leaving corner k of face f, towards corners k+1 and k+2. */
+static void corner_edges(const pz_mesh *mesh, int32_t f, int k, double *u, double *w)
+{
+    const int32_t *corner = mesh->faces + 3 * f;
+    const double *origin = mesh->positions + 3 * corner[k];
+    subtract3(mesh->positions + 3 * corner[(k + 1) % 3], origin, u);
+    subtract3(mesh->positions + 3 * corner[(k + 2) % 3], origin, w);
+}
+
+static double corner_angle(const pz_mesh *mesh, int32_t f, int k)
+{
+    double u[3], w[3], c[3];
+    corner_edges(mesh, f, k, u, w);
+    cross3(u, w, c);
+    return atan2(norm3(c), dot3(u, w));
+}
+
+static double corner_cotangent(const pz_mesh *mesh, int32_t f, int k)
+{
+    double u[3], w[3], c[3];
+    corner_edges(mesh, f, k, u, w);
+    cross3(u, w, c);
+    double sine_term = norm3(c);
+    return sine_term > 0.0 ? dot3(u, w) / sine_term : 0.0;
+}
+
+void pz_geom_face_areas(const pz_mesh *mesh, double *areas)
+{
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double c[3];
+        face_cross(mesh, f, c);
+        areas[f] = 0.5 * norm3(c);
+    }
+}
+
+void pz_geom_face_normals(const pz_mesh *mesh, double *normals)
+{
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double c[3];
+        face_cross(mesh, f, c);
+        double length = norm3(c);
+        for (int k = 0; k < 3; ++k)
+            normals[3 * f + k] = length > 0.0 ? c[k] / length : 0.0;
+    }
+}
+
+double pz_geom_total_area(const pz_mesh *mesh)
+{
+    double total = 0.0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double c[3];
+        face_cross(mesh, f, c);
+        total += 0.5 * norm3(c);
+    }
+    return total;
+}
+
+void pz_geom_corner_angles(const pz_mesh *mesh, double *angles)
+{
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k)
+            angles[3 * f + k] = corner_angle(mesh, f, k);
+}
+
+/* Half-edge h = 3f + k runs corner k -> k+1; the angle opposite it is at corner k+2. */
+void pz_geom_cotan_weights(const pz_mesh *mesh, const pz_topology *topology, double *weights)
+{
+    memset(weights, 0, (size_t)topology->edge_count * sizeof *weights);
+    for (int32_t h = 0; h < topology->halfedge_count; ++h)
+        weights[topology->halfedge_edge[h]] += 0.5 * corner_cotangent(mesh, pz_he_face(h), (h % 3 + 2) % 3);
+}
+
+/* Sum of the corner angles at each vertex. */
+static void angle_sums(const pz_mesh *mesh, double *sums)
+{
+    memset(sums, 0, (size_t)mesh->vertex_count * sizeof *sums);
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k)
+            sums[mesh->faces[3 * f + k]] += corner_angle(mesh, f, k);
+}
+
+void pz_geom_angle_defect(const pz_mesh *mesh, const pz_topology *topology, double *defect)
+{
+    angle_sums(mesh, defect);
+    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+        if (topology->vertex_halfedge[v] < 0)
+            defect[v] = 0.0;
+        else
+            defect[v] = (topology->vertex_on_boundary[v] ? PZ_PI : 2.0 * PZ_PI) - defect[v];
+    }
+}
+
+void pz_geom_developability(const pz_mesh *mesh, const pz_topology *topology, double *e_dev)
+{
+    angle_sums(mesh, e_dev);
+    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+        if (topology->vertex_halfedge[v] < 0 || topology->vertex_on_boundary[v])
+            e_dev[v] = 0.0;
+        else
+            e_dev[v] = fabs(e_dev[v] - 2.0 * PZ_PI);
+    }
+}

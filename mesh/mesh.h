@@ -1,0 +1,491 @@
+/*
+ * mesh/mesh.h -- the public face of panelize's mesh core.
+ *
+ * Everything later stages stand on: the context and status codes, the triangle
+ * mesh with its optional UVs, labels and poses, connectivity (half-edges in a
+ * corner layout), validation, geometry, cutting, file formats, and the
+ * synthetic garments used as the default input and as test fixtures.
+ *
+ * Conventions (see docs/mesh.md):
+ *  - Shapes are written in libigl's notation: `nv x 3` means nv rows of 3,
+ *    row-major, contiguous.
+ *  - Every function that can fail takes a `pz_ctx *` last and returns a
+ *    pz_status. On failure it writes a one-line message into the context,
+ *    leaves every `T **out` at NULL and leaks nothing.
+ *  - A function that allocates takes `T **out`; the caller owns the result and
+ *    frees it with the matching `pz_*_free(&p)`, which accepts NULL and sets
+ *    the pointer to NULL.
+ *  - Indices are int32_t (a mesh has fewer than 2^31 elements).
+ *  - Lengths are millimetres once a mesh has been through pz_mesh_to_mm();
+ *    readers return the file's own units.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_MESH_H
+#define PZ_MESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PZ_VERSION_STRING "0.1.0"
+
+/* ------------------------------------------------------------------------ */
+/* Status and context                                                        */
+/* ------------------------------------------------------------------------ */
+
+/** One status enum for every call: 0 is success, negative values are errors. */
+typedef enum pz_status {
+    PZ_OK = 0,
+    PZ_ERR_USAGE = -1,         /* bad command line or impossible parameter   (exit 64) */
+    PZ_ERR_DATA = -2,          /* malformed file or mismatched poses         (exit 65) */
+    PZ_ERR_INVALID_MESH = -3,  /* parses, but fails validation               (exit 65) */
+    PZ_ERR_OPEN = -4,          /* cannot open or read an input               (exit 66) */
+    PZ_ERR_CREATE = -5,        /* cannot create or write an output           (exit 73) */
+    PZ_ERR_NOMEM = -6,         /* out of memory                              (exit 70) */
+    PZ_ERR_INTERNAL = -7       /* a bug or a failed numerical step           (exit 70) */
+} pz_status;
+
+/** Short name of a status ("ok", "usage error", ...). Never NULL. */
+const char *pz_status_str(pz_status status);
+
+/** The process exit code for a status (0, 64, 65, 66, 70, 73; sysexits.h). */
+int pz_status_exit_code(pz_status status);
+
+/**
+ * The context passed last to every fallible call. Zero-initialize it (or call
+ * pz_ctx_init). It holds the last error message and the logging switches; it
+ * owns no heap memory, so it needs no free.
+ */
+typedef struct pz_ctx {
+    char error[1024];  /* last error, one line, "FILE: problem" */
+    int quiet;         /* 1: pz_log/pz_note print nothing */
+    int verbose;       /* 1: pz_debug prints too */
+} pz_ctx;
+
+void pz_ctx_init(pz_ctx *ctx);
+
+/**
+ * Records a one-line error in ctx->error (printf format; newlines are replaced
+ * by spaces) and returns `status` so a caller can write
+ * `return pz_error(ctx, PZ_ERR_DATA, "%s: line %d: bad face", path, line);`.
+ */
+pz_status pz_error(pz_ctx *ctx, pz_status status, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/** Progress and notes on stderr ("panelize: ..."), silenced by ctx->quiet. */
+void pz_note(pz_ctx *ctx, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/** Wall-clock seconds from a monotonic clock, for timings. */
+double pz_seconds(void);
+
+/* ------------------------------------------------------------------------ */
+/* Atomic output files                                                       */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Output is written to "PATH.tmp-PID" and renamed to PATH only on success, so
+ * a failed run leaves nothing behind.
+ *   pz_output out; FILE *f;
+ *   if ((st = pz_output_open(&out, path, "wb", ctx))) return st;
+ *   ... write to out.file ...
+ *   return pz_output_commit(&out, ctx);   (or pz_output_abort(&out) on error)
+ * pz_output_commit checks write errors (ferror, fclose) and reports
+ * PZ_ERR_CREATE naming PATH. pz_output_abort closes and removes the temporary.
+ */
+typedef struct pz_output {
+    FILE *file;
+    char *path;      /* final path (owned) */
+    char *tmp_path;  /* temporary path (owned) */
+} pz_output;
+
+pz_status pz_output_open(pz_output *out, const char *path, const char *mode, pz_ctx *ctx);
+pz_status pz_output_commit(pz_output *out, pz_ctx *ctx);
+void pz_output_abort(pz_output *out);
+
+/* ------------------------------------------------------------------------ */
+/* The mesh                                                                  */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * A triangle mesh. All arrays are owned by the mesh and freed by pz_mesh_free.
+ *
+ * UVs are indexed per corner, as in OBJ: corner k of face f has the UV
+ * uvs[2*corner_uvs[3*f+k] .. +1]. This keeps UV seams (two corners of one
+ * vertex with different UV indices) exactly, which `--panels uv` relies on.
+ *
+ * Labels are per face (OBJ `g`/`o` groups, glTF primitives or panels); label
+ * L's name is label_names[L] (may be NULL for unnamed labels).
+ *
+ * Extra poses share the connectivity: pose p's positions are
+ * poses[(p * vertex_count + v) * 3 .. +2]. The rest pose is `positions`.
+ */
+typedef struct pz_mesh {
+    int32_t vertex_count;
+    int32_t face_count;
+    double *positions;      /* vertex_count x 3 */
+    int32_t *faces;         /* face_count x 3, counter-clockwise seen from the normal side */
+
+    int32_t uv_count;       /* 0 when the mesh has no UVs */
+    double *uvs;            /* uv_count x 2, or NULL */
+    int32_t *corner_uvs;    /* face_count x 3 indices into uvs, or NULL */
+
+    int32_t *face_labels;   /* face_count, or NULL */
+    int32_t label_count;    /* number of distinct labels: 0 .. label_count-1 */
+    char **label_names;     /* label_count strings (entries may be NULL), or NULL */
+
+    int32_t pose_count;     /* extra poses, 0 when there are none */
+    double *poses;          /* pose_count x vertex_count x 3, or NULL */
+
+    double unit_scale;      /* millimetres per file unit applied so far (1 after pz_mesh_to_mm with mm) */
+} pz_mesh;
+
+/** Allocates a mesh with room for the given counts (arrays zeroed; no UVs, labels or poses). */
+pz_status pz_mesh_create(int32_t vertex_count, int32_t face_count, pz_mesh **out, pz_ctx *ctx);
+
+/** Frees a mesh and everything it owns; accepts NULL and *mesh == NULL; sets *mesh = NULL. */
+void pz_mesh_free(pz_mesh **mesh);
+
+/** Deep copy. */
+pz_status pz_mesh_copy(const pz_mesh *mesh, pz_mesh **out, pz_ctx *ctx);
+
+/** Axis-aligned bounding box of the rest pose: bbox_min[3], bbox_max[3]. Zeros for an empty mesh. */
+void pz_mesh_bbox(const pz_mesh *mesh, double bbox_min[3], double bbox_max[3]);
+
+/** Length units a file may be in. */
+typedef enum pz_units {
+    PZ_UNITS_AUTO = 0,
+    PZ_UNITS_MM,
+    PZ_UNITS_CM,
+    PZ_UNITS_M
+} pz_units;
+
+/** "mm", "cm", "m" ("auto" for PZ_UNITS_AUTO). */
+const char *pz_units_str(pz_units units);
+/** Parses "mm", "cm", "m", "auto"; returns PZ_ERR_USAGE otherwise. */
+pz_status pz_units_parse(const char *text, pz_units *out, pz_ctx *ctx);
+/** Millimetres per unit: 1, 10, 1000. */
+double pz_units_to_mm(pz_units units);
+
+/**
+ * Guesses the units from the bounding box: a garment is 0.2 - 2 m in its
+ * largest extent. Returns the unit in which the largest extent falls closest
+ * to that range (see docs/mesh.md for the exact rule). An empty mesh is mm.
+ */
+pz_units pz_mesh_guess_units(const pz_mesh *mesh);
+
+/**
+ * Scales the positions and every pose to millimetres. `units` AUTO means
+ * guess. Writes the units used to *used (may be NULL). UVs are not scaled.
+ */
+void pz_mesh_to_mm(pz_mesh *mesh, pz_units units, pz_units *used);
+
+/**
+ * Adds one pose (vertex_count x 3 positions, copied) to the mesh.
+ */
+pz_status pz_mesh_add_pose(pz_mesh *mesh, const double *positions, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Validation                                                                */
+/* ------------------------------------------------------------------------ */
+
+/** Counts of every problem validation looks for. */
+typedef struct pz_validation {
+    int32_t nonfinite_coordinates;   /* vertices with a NaN or infinite coordinate (any pose) */
+    int32_t bad_indices;             /* face corners out of range or repeated in one face */
+    int32_t degenerate_faces;        /* zero-area faces (two equal corners or collinear: area <= eps * diag^2) */
+    int32_t duplicate_faces;         /* faces with the same vertex set as an earlier face */
+    int32_t nonmanifold_edges;       /* edges with more than two incident faces */
+    int32_t nonmanifold_vertices;    /* vertices whose incident faces form more than one fan */
+    int32_t inconsistent_edges;      /* interior edges whose two faces traverse them the same way */
+    int32_t unreferenced_vertices;   /* vertices no face uses */
+    int32_t problem_count;           /* number of strings in problems */
+    char **problems;                 /* one line per kind of problem found, e.g.
+                                        "3 non-manifold edges (first: vertices 10-11)";
+                                        unreferenced vertices are listed too */
+} pz_validation;
+
+/**
+ * Checks a mesh for every problem above. O(F log F). Returns PZ_OK when the
+ * checks ran (whatever they found); *out is filled and must be released with
+ * pz_validation_clear. Use pz_validation_ok to ask whether the mesh is valid.
+ */
+pz_status pz_mesh_validate(const pz_mesh *mesh, pz_validation *out, pz_ctx *ctx);
+
+/** 1 when nothing but unreferenced vertices was found. */
+int pz_validation_ok(const pz_validation *validation);
+
+/** Frees the problem strings and zeroes the struct. */
+void pz_validation_clear(pz_validation *validation);
+
+/** Repairs a command can ask for before refusing a mesh (documented in docs/mesh.md). */
+typedef enum pz_repair_flags {
+    PZ_REPAIR_NONE = 0,
+    PZ_REPAIR_DROP_DEGENERATE = 1 << 0,  /* remove zero-area faces */
+    PZ_REPAIR_DROP_DUPLICATES = 1 << 1,  /* remove repeated faces */
+    PZ_REPAIR_ORIENT = 1 << 2            /* flip faces to a consistent orientation per component */
+} pz_repair_flags;
+
+/**
+ * Drops unreferenced vertices (always; the note says how many), applies the
+ * requested repairs in place, then validates. Returns PZ_ERR_INVALID_MESH with
+ * a one-line message naming `path` and the first remaining problem when the
+ * mesh is still not valid. Reports what it did through pz_note.
+ */
+pz_status pz_mesh_prepare(pz_mesh *mesh, const char *path, unsigned repair_flags, pz_ctx *ctx);
+
+/** Removes vertices that no face references, renumbering faces. Writes the count removed to *removed (may be NULL). */
+pz_status pz_mesh_drop_unreferenced(pz_mesh *mesh, int32_t *removed, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Connectivity                                                              */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Half-edges in corner layout (docs/mesh.md): half-edge h = 3*f + k belongs to
+ * face f and runs from faces[3f+k] to faces[3f+(k+1)%3]. next(h) and prev(h)
+ * are arithmetic (pz_he_next, pz_he_prev); twin[h] is the opposite half-edge or
+ * -1 on the boundary. Each undirected edge e has edge_halfedge[2e] (always
+ * valid) and edge_halfedge[2e+1] (-1 on the boundary). vertex_halfedge[v] is an
+ * outgoing half-edge of v; for a boundary vertex it is the one whose
+ * prev-around-the-vertex is missing, so ordered one-ring walks start at the
+ * boundary. Built in O(F log F) (sort of directed edges).
+ * Requires an edge-manifold, consistently oriented mesh with no vertex fans
+ * split (pz_mesh_validate ok).
+ */
+typedef struct pz_topology {
+    int32_t vertex_count;
+    int32_t face_count;
+    int32_t edge_count;
+    int32_t halfedge_count;    /* 3 * face_count */
+    const int32_t *faces;      /* borrowed from the mesh: face_count x 3 */
+    int32_t *twin;             /* halfedge_count */
+    int32_t *halfedge_edge;    /* halfedge_count: the undirected edge of a half-edge */
+    int32_t *edge_halfedge;    /* edge_count x 2 */
+    int32_t *vertex_halfedge;  /* vertex_count: outgoing half-edge, -1 for an isolated vertex */
+    uint8_t *vertex_on_boundary; /* vertex_count: 1 on the boundary */
+} pz_topology;
+
+static inline int32_t pz_he_face(int32_t h) { return h / 3; }
+static inline int32_t pz_he_next(int32_t h) { return h - h % 3 + (h % 3 + 1) % 3; }
+static inline int32_t pz_he_prev(int32_t h) { return h - h % 3 + (h % 3 + 2) % 3; }
+static inline int32_t pz_he_from(const pz_topology *t, int32_t h) { return t->faces[h]; }
+static inline int32_t pz_he_to(const pz_topology *t, int32_t h) { return t->faces[pz_he_next(h)]; }
+
+/** Builds connectivity. The topology borrows mesh->faces: keep the mesh alive and unchanged. */
+pz_status pz_topology_build(const pz_mesh *mesh, pz_topology **out, pz_ctx *ctx);
+void pz_topology_free(pz_topology **topology);
+
+/**
+ * Ordered one-ring of v: the neighbour vertices counter-clockwise around the
+ * normal. For a boundary vertex the list starts and ends at the two boundary
+ * neighbours. Writes up to `capacity` indices to `ring` and returns the full
+ * count (call with capacity 0 to size). Isolated vertex: 0.
+ */
+int32_t pz_topology_vertex_ring(const pz_topology *topology, int32_t v, int32_t *ring, int32_t capacity);
+
+/**
+ * Boundary loops: loop_count loops; loop i has the vertices
+ * loop_vertices[loop_offsets[i] .. loop_offsets[i+1]-1] in order, walking with
+ * the surface on the left (the direction of the boundary half-edges).
+ */
+typedef struct pz_loops {
+    int32_t loop_count;
+    int32_t *loop_offsets;   /* loop_count + 1 */
+    int32_t *loop_vertices;  /* loop_offsets[loop_count] */
+} pz_loops;
+
+pz_status pz_topology_boundary_loops(const pz_topology *topology, pz_loops **out, pz_ctx *ctx);
+void pz_loops_free(pz_loops **loops);
+
+/**
+ * Connected components over faces (faces sharing an edge or a vertex are
+ * connected). face_component: face_count, written by the caller's buffer.
+ * Returns the component count (>= 0), or a negative pz_status.
+ */
+int32_t pz_topology_components(const pz_topology *topology, int32_t *face_component, pz_ctx *ctx);
+
+/** Topological summary of a mesh. */
+typedef struct pz_topology_summary {
+    int32_t vertex_count, edge_count, face_count;
+    int32_t component_count;
+    int32_t boundary_loop_count;
+    int32_t euler_characteristic;   /* V - E + F over referenced vertices */
+    int32_t genus;                  /* total genus: sum over components of (2 - chi_c - b_c) / 2 */
+} pz_topology_summary;
+
+pz_status pz_topology_summarize(const pz_topology *topology, pz_topology_summary *out, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Geometry (rest pose unless a positions array is passed)                   */
+/* ------------------------------------------------------------------------ */
+
+/** Face areas: face_count. */
+void pz_geom_face_areas(const pz_mesh *mesh, double *areas);
+/** Unit face normals: face_count x 3 (zero vector for a degenerate face). */
+void pz_geom_face_normals(const pz_mesh *mesh, double *normals);
+/** Total area. */
+double pz_geom_total_area(const pz_mesh *mesh);
+/** Corner angles in radians: face_count x 3, angle at corner k of face f. */
+void pz_geom_corner_angles(const pz_mesh *mesh, double *angles);
+/**
+ * Cotangent weights per edge: edge_count, w_e = (cot a + cot b) / 2 over the
+ * one or two angles opposite the edge.
+ */
+void pz_geom_cotan_weights(const pz_mesh *mesh, const pz_topology *topology, double *weights);
+/**
+ * Angle defect per vertex (discrete Gaussian curvature times area):
+ * 2 pi - sum of angles for interior vertices, pi - sum for boundary vertices.
+ */
+void pz_geom_angle_defect(const pz_mesh *mesh, const pz_topology *topology, double *defect);
+/**
+ * Developability error per vertex (wang2008, Eq. 25): |sum of angles - 2 pi|
+ * for interior vertices, 0 for boundary vertices.
+ */
+void pz_geom_developability(const pz_mesh *mesh, const pz_topology *topology, double *e_dev);
+
+/* ------------------------------------------------------------------------ */
+/* Cutting                                                                   */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Splits the mesh along the edges with cut[e] != 0 (edge_count flags from
+ * `topology`), duplicating the vertices on the cuts so that faces on the two
+ * sides of a cut edge no longer share it. A vertex gets one copy per fan of
+ * faces left connected around it. UVs, labels and poses are carried over.
+ * *vertex_map (new vertex count) gives the original vertex of every new
+ * vertex; faces keep their order. Caller frees *out (pz_mesh_free) and
+ * *vertex_map (free). vertex_map may be NULL.
+ */
+pz_status pz_mesh_cut(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *cut,
+                      pz_mesh **out, int32_t **vertex_map, pz_ctx *ctx);
+
+/**
+ * Extracts the faces face_ids[0..count-1] as their own mesh (a panel), in that
+ * order, with only the vertices they use (in order of first use). UVs, labels
+ * and poses are carried over. *vertex_map (panel vertex count) maps panel
+ * vertices to original vertices; *face_map (count) maps panel faces to
+ * original faces. Either map pointer may be NULL; the caller frees both.
+ */
+pz_status pz_mesh_extract(const pz_mesh *mesh, const int32_t *face_ids, int32_t count,
+                          pz_mesh **out, int32_t **vertex_map, int32_t **face_map, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* File formats                                                              */
+/* ------------------------------------------------------------------------ */
+
+typedef enum pz_format {
+    PZ_FORMAT_UNKNOWN = 0,
+    PZ_FORMAT_OBJ,
+    PZ_FORMAT_PLY,
+    PZ_FORMAT_OFF,
+    PZ_FORMAT_GLB,   /* binary glTF */
+    PZ_FORMAT_GLTF   /* JSON glTF with external or data: URI buffers */
+} pz_format;
+
+/** The format from a path's extension (case-insensitive), PZ_FORMAT_UNKNOWN otherwise. */
+pz_format pz_format_from_path(const char *path);
+
+/**
+ * Reads a mesh in any supported format (chosen by extension). Errors name the
+ * path: PZ_ERR_OPEN (missing or unreadable), PZ_ERR_DATA (malformed, empty,
+ * index out of range, truncated). Does not validate; coordinates are in the
+ * file's units (unit_scale = 1).
+ */
+pz_status pz_mesh_read(const char *path, pz_mesh **out, pz_ctx *ctx);
+
+/**
+ * Parsers from memory, for tests and fuzzing. `name` is used in messages.
+ * OBJ: v, vt, f (v, v/vt, v//vn, v/vt/vn, negative indices), polygons
+ * fan-triangulated, `g`/`o` groups become labels, other lines ignored.
+ * PLY: ascii, binary_little_endian, binary_big_endian; vertex x y z,
+ * face vertex_indices / vertex_index lists, optional per-vertex s t / u v /
+ * texture_u texture_v (shared per vertex), other properties skipped.
+ * OFF: OFF / COFF / NOFF headers, polygons fan-triangulated.
+ */
+pz_status pz_obj_read_memory(const char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);
+pz_status pz_ply_read_memory(const unsigned char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);
+pz_status pz_off_read_memory(const char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);
+/** glTF 2.0 from memory: binary GLB (`binary` = 1) or JSON (base_dir for external buffers; may be NULL). */
+pz_status pz_gltf_read_memory(const unsigned char *data, size_t size, int binary, const char *base_dir,
+                              const char *name, pz_mesh **out, pz_ctx *ctx);
+
+/**
+ * Loads a rest mesh plus extra pose files with identical connectivity: the
+ * rest file's own poses (glTF morph targets) come first, then each pose
+ * file's rest positions. A pose whose vertex or face count or face list
+ * differs is PZ_ERR_DATA naming both files.
+ */
+pz_status pz_mesh_read_with_poses(const char *path, const char *const *pose_paths, int pose_path_count,
+                                  pz_mesh **out, pz_ctx *ctx);
+
+/** Options for writers. Zero = defaults. */
+typedef struct pz_write_options {
+    const uint32_t *label_colors;  /* label_count RGBA8 colours (0xRRGGBBAA) for GLB; NULL = a built-in palette */
+    const char *extras_json;       /* GLB: a JSON object text stored as the asset's extras (metadata), or NULL */
+    int write_poses;               /* GLB: write poses as morph targets (default 1 when 0 and poses exist: see docs) */
+} pz_write_options;
+
+/**
+ * Writes a mesh, atomically (temporary file, then rename). Format by
+ * extension: .obj (v, vt, f v/vt, one `g NAME` group per label run), .ply
+ * (binary little endian; UVs as per-vertex s,t only when each vertex has one
+ * UV), .glb. Errors: PZ_ERR_CREATE naming the path.
+ */
+pz_status pz_mesh_write(const pz_mesh *mesh, const char *path, const pz_write_options *options, pz_ctx *ctx);
+
+/** Writers to an open stream (used by pz_mesh_write). */
+pz_status pz_obj_write_file(const pz_mesh *mesh, FILE *file, pz_ctx *ctx);
+pz_status pz_ply_write_file(const pz_mesh *mesh, FILE *file, pz_ctx *ctx);
+/** GLB writer: path is the final file; writes atomically itself. */
+pz_status pz_glb_write(const pz_mesh *mesh, const char *path, const pz_write_options *options, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Synthetic garments and surfaces                                            */
+/* ------------------------------------------------------------------------ */
+
+typedef enum pz_shape {
+    PZ_SHAPE_UNKNOWN = 0,
+    PZ_SHAPE_BODICE,          /* sleeveless torso tube: bust, waist, hip; two boundary loops */
+    PZ_SHAPE_SKIRT,           /* flared skirt shaped at the hip; two boundary loops */
+    PZ_SHAPE_SLEEVE,          /* bent tube; two boundary loops */
+    PZ_SHAPE_HEMISPHERE,      /* one boundary loop, positive curvature */
+    PZ_SHAPE_QUARTER_SPHERE,  /* one boundary loop, positive curvature */
+    PZ_SHAPE_SADDLE,          /* one boundary loop, negative curvature */
+    PZ_SHAPE_CYLINDER,        /* developable; two loops, or one with `open` */
+    PZ_SHAPE_CONE             /* developable (truncated); two loops, or one with `open` */
+} pz_shape;
+
+/** Parses a shape name ("bodice", "quarter-sphere", ...); PZ_SHAPE_UNKNOWN otherwise. */
+pz_shape pz_shape_parse(const char *name);
+const char *pz_shape_name(pz_shape shape);
+
+typedef struct pz_generate_options {
+    int32_t target_faces;  /* approximate face count; 0 = 20000. 500 .. 1,000,000 keep well-shaped faces */
+    int32_t pose_count;    /* extra deformed poses (bending, twisting, breathing); 0 = none */
+    int open;              /* cylinder/cone: cut along a ruling into a disk */
+} pz_generate_options;
+
+/**
+ * Generates a shape in millimetres at human scale, counter-clockwise faces
+ * with normals pointing outward (away from the body), manifold and well shaped.
+ * Extra poses share the connectivity. Caller frees *out.
+ */
+pz_status pz_generate(pz_shape shape, const pz_generate_options *options, pz_mesh **out, pz_ctx *ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PZ_MESH_H */

@@ -1,0 +1,109 @@
+/*
+ * pipeline/cli.h -- internal header of the panelize command line.
+ *
+ * The CLI is a table of commands (main.c). Each command names the options it
+ * accepts; main.c parses the command line once into a pz_cli_args (both
+ * `--opt value` and `--opt=value`, positional arguments anywhere, `--` ends
+ * the options) and hands it to the command's run function, which returns a
+ * pz_status. main.c turns that status into the exit code and prints the one
+ * error line `panelize: <ctx.error>`; commands never print errors themselves.
+ *
+ * Output rules every command keeps (docs/cli.md): results on stdout (text, or
+ * one JSON object with --json), progress and timings on stderr through
+ * pz_note (silenced by --quiet), files only through pz_mesh_write or
+ * pz_output_open/commit so that a failed run leaves nothing behind.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_CLI_H
+#define PZ_CLI_H
+
+#include "mesh/mesh.h"
+
+#include <cjson/cJSON.h>
+
+/** Options a command may accept (a bit set per command). */
+enum pz_cli_option {
+    PZ_CLI_OPT_QUIET = 1u << 0,   /* --quiet */
+    PZ_CLI_OPT_JSON = 1u << 1,    /* --json */
+    PZ_CLI_OPT_UNITS = 1u << 2,   /* --units mm|cm|m|auto */
+    PZ_CLI_OPT_REPAIR = 1u << 3,  /* --repair */
+    PZ_CLI_OPT_POSE = 1u << 4,    /* --pose FILE (repeatable) */
+    PZ_CLI_OPT_OUTPUT = 1u << 5,  /* -o FILE / --output FILE */
+    PZ_CLI_OPT_FACES = 1u << 6,   /* --faces N */
+    PZ_CLI_OPT_POSES = 1u << 7,   /* --poses K */
+    PZ_CLI_OPT_OPEN = 1u << 8     /* --open */
+};
+
+/** Options every command takes. */
+#define PZ_CLI_OPT_COMMON (PZ_CLI_OPT_QUIET | PZ_CLI_OPT_JSON)
+
+/** The parsed command line of one command. Strings point into argv. */
+typedef struct pz_cli_args {
+    const char *command;        /* the command's name, for messages */
+    int quiet;                  /* --quiet */
+    int json;                   /* --json */
+    pz_units units;             /* --units; PZ_UNITS_AUTO = guess */
+    unsigned repair_flags;      /* --repair: pz_repair_flags for pz_mesh_prepare */
+    const char **pose_paths;    /* --pose files, in order (owned array) */
+    int pose_path_count;
+    const char *output_path;    /* -o, or NULL */
+    int32_t target_faces;       /* --faces; 0 = the generator's default */
+    int32_t pose_count;         /* --poses */
+    int open;                   /* --open */
+    const char **positionals;   /* arguments that are not options (owned array) */
+    int positional_count;
+} pz_cli_args;
+
+/** One command of the table in main.c. */
+typedef struct pz_cli_command {
+    const char *name;
+    const char *summary;        /* one line for `panelize --help` */
+    const char *usage;          /* full text for `panelize COMMAND --help` */
+    unsigned options;           /* accepted pz_cli_option bits */
+    pz_status (*run)(const pz_cli_args *args, pz_ctx *ctx);
+} pz_cli_command;
+
+/* Commands (cmd_info.c, cmd_generate.c) and their help texts. */
+pz_status pz_cli_info(const pz_cli_args *args, pz_ctx *ctx);
+pz_status pz_cli_check(const pz_cli_args *args, pz_ctx *ctx);
+pz_status pz_cli_generate(const pz_cli_args *args, pz_ctx *ctx);
+extern const char pz_cli_info_usage[];
+extern const char pz_cli_check_usage[];
+extern const char pz_cli_generate_usage[];
+
+/* ---------------------------------------------------------------- helpers (main.c) */
+
+/**
+ * Requires exactly `count` positional arguments; otherwise PZ_ERR_USAGE
+ * "COMMAND: expected WHAT".
+ */
+pz_status pz_cli_expect_positionals(const pz_cli_args *args, int count, const char *what, pz_ctx *ctx);
+
+/**
+ * Loads the mesh a command works on: reads `path` with the --pose files,
+ * converts to millimetres (--units, or guessed; *units_used may be NULL) and
+ * makes it valid through pz_mesh_prepare with the --repair flags. Fails with
+ * PZ_ERR_INVALID_MESH (exit 65) naming the file when the mesh stays invalid.
+ * Every command that needs a valid mesh goes through here.
+ */
+pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_mesh **out,
+                                 pz_units *units_used, pz_ctx *ctx);
+
+/** Milliseconds between two pz_seconds() readings, rounded to microseconds. */
+double pz_cli_elapsed_ms(double start, double end);
+
+/** Rounds to `decimals` decimals so JSON numbers print short. */
+double pz_cli_round(double value, int decimals);
+
+/** A JSON array of 3 numbers, or NULL when out of memory. */
+cJSON *pz_cli_json_vec3(const double values[3], int decimals);
+
+/**
+ * Prints `root` on stdout as one JSON document followed by a newline, and
+ * deletes it. `build_failed` (some cJSON_Add* returned NULL) or a failed print
+ * is PZ_ERR_NOMEM.
+ */
+pz_status pz_cli_print_json(cJSON *root, int build_failed, pz_ctx *ctx);
+
+#endif /* PZ_CLI_H */

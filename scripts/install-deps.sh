@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Installs every Debian package (and the one npm tool) that panelize's build,
+# tests and tools need. Does nothing when they are all present.
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+packages=(
+  build-essential cmake pkg-config python3
+  libsuitesparse-dev      # CHOLMOD: every sparse solve
+  libcgal-dev             # remeshing, exact predicates, polygon offsets
+  libtinygltf-dev nlohmann-json3-dev libstb-dev   # glTF in and out (libtinygltf.so)
+  libcjson-dev            # JSON reports and JSON inputs
+  clang libclang-rt-14-dev  # libFuzzer targets
+  nodejs npm              # the Khronos glTF validator used by the tests
+)
+
+missing=()
+for package in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")
+done
+if ((${#missing[@]})); then
+  echo "install-deps: installing ${missing[*]}" >&2
+  sudo=""
+  [[ $(id -u) -eq 0 ]] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# The Khronos glTF validator (npm), kept inside the checkout under .tools/ (git-ignored).
+if [[ ! -f .tools/node_modules/gltf-validator/package.json ]]; then
+  echo "install-deps: installing gltf-validator into .tools/" >&2
+  mkdir -p .tools
+  npm install --silent --no-audit --no-fund --prefix .tools gltf-validator@2.0.0-dev.3.10 >/dev/null
+fi

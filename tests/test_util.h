@@ -1,0 +1,61 @@
+/*
+ * tests/test_util.h -- the small assertion kit every C test uses.
+ *
+ * CHECK(cond, fmt, ...) records a failure with file and line and goes on;
+ * REQUIRE stops the test. A test's main ends with `return test_finish();`
+ * which prints "N passed, M failed" and returns 1 when anything failed.
+ * test_skip("why") prints the reason and exits 77 (ctest's SKIP_RETURN_CODE).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_TEST_UTIL_H
+#define PZ_TEST_UTIL_H
+
+#include <stdio.h>
+#include <stdlib.h>
+
+static int test_checks_passed;
+static int test_checks_failed;
+static int test_check_result; /* the last CHECK's outcome: REQUIRE must not evaluate twice */
+
+#define CHECK(cond, ...)                                                   \
+    do {                                                                   \
+        if (test_check_result = !!(cond), test_check_result) {                                                        \
+            ++test_checks_passed;                                          \
+        } else {                                                           \
+            ++test_checks_failed;                                          \
+            fprintf(stderr, "%s:%d: CHECK failed: %s: ", __FILE__, __LINE__, #cond); \
+            fprintf(stderr, __VA_ARGS__);                                  \
+            fputc('\n', stderr);                                           \
+        }                                                                  \
+    } while (0)
+
+#define REQUIRE(cond, ...)                                                 \
+    do {                                                                   \
+        CHECK(cond, __VA_ARGS__);                                          \
+        if (!test_check_result) {                                                     \
+            fprintf(stderr, "stopping this test\n");                       \
+            exit(test_finish());                                           \
+        }                                                                  \
+    } while (0)
+
+static inline int test_finish(void)
+{
+    printf("%d passed, %d failed\n", test_checks_passed, test_checks_failed);
+    return test_checks_failed ? 1 : 0;
+}
+
+static inline void test_skip(const char *why)
+{
+    printf("SKIPPED: %s\n", why);
+    exit(77);
+}
+
+/* Directory of the shared real meshes, or NULL when it is not there. */
+static inline const char *test_shared_data(void)
+{
+    const char *dir = getenv("PZ_SHARED_DATA");
+    return dir && *dir ? dir : NULL;
+}
+
+#endif
