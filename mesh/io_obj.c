@@ -453,9 +453,12 @@ static pz_status obj_read_face(obj_reader *reader, const char *p, const char *en
 static pz_status obj_read_group(obj_reader *reader, const char *p, const char *end)
 {
     p = obj_skip_space(p, end);
-    const char *nul = p < end ? memchr(p, '\0', (size_t)(end - p)) : NULL;
-    if (nul) /* names are C strings: a NUL byte ends one (the label table compares with strncmp) */
-        end = nul;
+    /* names are C strings: a NUL byte ends one (the label table compares with strncmp) */
+    for (const char *c = p; c < end; ++c)
+        if (*c == '\0') {
+            end = c;
+            break;
+        }
     while (end > p && obj_is_space(end[-1]))
         --end;
     static const char unnamed[] = "default";

@@ -154,7 +154,7 @@ double pz_units_to_mm(pz_units units)
  * of the range). Ties in the overlap therefore go to the reading nearest a
  * typical garment, which is what a user with a 1.2-unit-tall mesh means (m).
  */
-pz_units pz_mesh_guess_units(const pz_mesh *mesh)
+static double largest_extent(const pz_mesh *mesh)
 {
     double lo[3], hi[3];
     pz_mesh_bbox(mesh, lo, hi);
@@ -162,6 +162,18 @@ pz_units pz_mesh_guess_units(const pz_mesh *mesh)
     for (int k = 0; k < 3; ++k)
         if (hi[k] - lo[k] > extent)
             extent = hi[k] - lo[k];
+    return extent;
+}
+
+int pz_mesh_units_plausible(const pz_mesh *mesh, pz_units units)
+{
+    double extent_mm = largest_extent(mesh) * pz_units_to_mm(units == PZ_UNITS_AUTO ? pz_mesh_guess_units(mesh) : units);
+    return extent_mm >= 200.0 && extent_mm <= 2000.0;
+}
+
+pz_units pz_mesh_guess_units(const pz_mesh *mesh)
+{
+    double extent = largest_extent(mesh);
     if (!(extent > 0.0) || !isfinite(extent))
         return PZ_UNITS_MM;
     static const pz_units candidates[3] = {PZ_UNITS_MM, PZ_UNITS_CM, PZ_UNITS_M};

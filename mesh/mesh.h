@@ -186,6 +186,13 @@ double pz_units_to_mm(pz_units units);
 pz_units pz_mesh_guess_units(const pz_mesh *mesh);
 
 /**
+ * 1 when the mesh's largest extent, read in `units`, lies in a garment's
+ * 200 - 2000 mm. A guess that is not plausible deserves a warning: the mesh is
+ * either not a garment or in a unit panelize cannot tell (give --units).
+ */
+int pz_mesh_units_plausible(const pz_mesh *mesh, pz_units units);
+
+/**
  * Scales the positions and every pose to millimetres. `units` AUTO means
  * guess. Writes the units used to *used (may be NULL). UVs are not scaled.
  */

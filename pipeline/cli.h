@@ -90,6 +90,20 @@ pz_status pz_cli_expect_positionals(const pz_cli_args *args, int count, const ch
 pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_mesh **out,
                                  pz_units *units_used, pz_ctx *ctx);
 
+/**
+ * Converts a freshly read mesh to millimetres with --units, or a guess.
+ * *plausible (may be NULL) says whether the size then fits a garment.
+ */
+void pz_cli_mesh_to_mm(const pz_cli_args *args, pz_mesh *mesh, pz_units *units_used, int *plausible);
+
+/**
+ * Warns on stderr when the units were guessed and the mesh (already in mm)
+ * fits no garment. Call it once the command has succeeded: a failed run
+ * prints exactly one line, its error.
+ */
+void pz_cli_warn_units(const pz_cli_args *args, const char *path, const pz_mesh *mesh, pz_units used,
+                       pz_ctx *ctx);
+
 /** Milliseconds between two pz_seconds() readings, rounded to microseconds. */
 double pz_cli_elapsed_ms(double start, double end);
 

@@ -66,6 +66,7 @@ typedef struct mesh_report {
     const pz_mesh *mesh;
     pz_units units;
     int units_guessed;
+    int units_plausible;   /* the extent in those units fits a garment (0.2 - 2 m) */
     pz_validation validation;
     int manifold;
     int32_t edge_count;
@@ -301,7 +302,9 @@ static void print_text(const mesh_report *report)
     for (int32_t i = 0; i < report->validation.problem_count; ++i)
         printf("  problem:            %s\n", report->validation.problems[i]);
     printf("units:                %s (%s)\n", pz_units_str(report->units),
-           report->units_guessed ? "guessed" : "given");
+           !report->units_guessed ? "given"
+           : report->units_plausible ? "guessed"
+                                     : "guessed, but the size fits no garment: give --units");
     double size[3];
     for (int k = 0; k < 3; ++k)
         size[k] = report->bbox_max[k] - report->bbox_min[k];
@@ -419,6 +422,7 @@ static pz_status print_json(const mesh_report *report, pz_ctx *ctx)
     failed = failed || !cJSON_AddNumberToObject(root, "poses", mesh->pose_count);
     failed = failed || !cJSON_AddStringToObject(root, "units", pz_units_str(report->units));
     failed = failed || !cJSON_AddBoolToObject(root, "units_guessed", report->units_guessed);
+    failed = failed || !cJSON_AddBoolToObject(root, "units_plausible", report->units_plausible);
     failed = failed || !cJSON_AddItemToObject(root, "bbox_mm", json_bbox(report));
     failed = failed || !cJSON_AddItemToObject(root, "area_mm2", report->area_known
                                                                     ? cJSON_CreateNumber(pz_cli_round(report->area_mm2, LENGTH_DECIMALS))
@@ -444,7 +448,7 @@ pz_status pz_cli_info(const pz_cli_args *args, pz_ctx *ctx)
     status = pz_mesh_read_with_poses(report.path, args->pose_paths, args->pose_path_count, &mesh, ctx);
     if (status != PZ_OK)
         return status;
-    pz_mesh_to_mm(mesh, args->units, &report.units);
+    pz_cli_mesh_to_mm(args, mesh, &report.units, &report.units_plausible);
     report.units_guessed = args->units == PZ_UNITS_AUTO;
     report.mesh = mesh;
     report.read_ms = pz_cli_elapsed_ms(start, pz_seconds());
@@ -453,6 +457,8 @@ pz_status pz_cli_info(const pz_cli_args *args, pz_ctx *ctx)
     report.total_ms = pz_cli_elapsed_ms(start, pz_seconds());
     if (status == PZ_OK)
         status = args->json ? print_json(&report, ctx) : (print_text(&report), PZ_OK);
+    if (status == PZ_OK)
+        pz_cli_warn_units(args, report.path, mesh, report.units, ctx);
     report_clear(&report);
     pz_mesh_free(&mesh);
     return status;

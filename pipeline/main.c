@@ -282,6 +282,25 @@ static pz_status prepare_quietly_first(pz_mesh **mesh, const char *path, unsigne
     return pz_mesh_prepare(*mesh, path, repair_flags, ctx);
 }
 
+void pz_cli_mesh_to_mm(const pz_cli_args *args, pz_mesh *mesh, pz_units *units_used, int *plausible)
+{
+    if (plausible)
+        *plausible = pz_mesh_units_plausible(mesh, args->units);
+    pz_mesh_to_mm(mesh, args->units, units_used);
+}
+
+void pz_cli_warn_units(const pz_cli_args *args, const char *path, const pz_mesh *mesh, pz_units used,
+                       pz_ctx *ctx)
+{
+    if (args->units != PZ_UNITS_AUTO || pz_mesh_units_plausible(mesh, PZ_UNITS_MM))
+        return;
+    double lo[3], hi[3];
+    pz_mesh_bbox(mesh, lo, hi);
+    double extent = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    pz_note(ctx, "%s: warning: units guessed as %s, but then the largest extent (%.0f mm) is outside a "
+            "garment's 200-2000 mm; give --units if that is wrong", path, pz_units_str(used), extent);
+}
+
 pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_mesh **out,
                                  pz_units *units_used, pz_ctx *ctx)
 {
@@ -290,12 +309,16 @@ pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_m
     pz_status status = pz_mesh_read_with_poses(path, args->pose_paths, args->pose_path_count, &mesh, ctx);
     if (status != PZ_OK)
         return status;
-    pz_mesh_to_mm(mesh, args->units, units_used);
+    pz_units used = PZ_UNITS_AUTO;
+    pz_cli_mesh_to_mm(args, mesh, &used, NULL);
     status = prepare_quietly_first(&mesh, path, args->repair_flags, ctx);
     if (status != PZ_OK) {
         pz_mesh_free(&mesh);
         return status;
     }
+    pz_cli_warn_units(args, path, mesh, used, ctx);
+    if (units_used)
+        *units_used = used;
     *out = mesh;
     return PZ_OK;
 }

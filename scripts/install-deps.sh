@@ -12,13 +12,15 @@ packages=(
   libtinygltf-dev nlohmann-json3-dev libstb-dev   # glTF in and out (libtinygltf.so)
   libcjson-dev            # JSON reports and JSON inputs
   clang libclang-rt-14-dev  # libFuzzer targets
-  nodejs npm              # the Khronos glTF validator used by the tests
 )
 
 missing=()
 for package in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed" || missing+=("$package")
 done
+# The glTF validator runs on Node.js. Some images ship a Node.js that bundles npm
+# (and conflicts with Debian's npm package): only ask for it when npm is absent.
+command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
 if ((${#missing[@]})); then
   echo "install-deps: installing ${missing[*]}" >&2
   sudo=""

@@ -3,7 +3,7 @@
 #  1. Release build, every test under ctest;
 #  2. the same tests built with AddressSanitizer + UndefinedBehaviorSanitizer;
 #  3. every parser's libFuzzer target, a short run on its seed corpus.
-# PZ_FUZZ_SECONDS (default 20) sets the length of each fuzz run.
+# PZ_FUZZ_SECONDS (default 45) sets the length of each fuzz run.
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,7 +26,7 @@ echo "== Fuzzing the parsers"
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=Debug -DPZ_FUZZ=ON \
   -DPZ_BUILD_TESTS=OFF -DPZ_BUILD_BENCH=OFF >/dev/null
 cmake --build build-fuzz -j"$jobs"
-seconds=${PZ_FUZZ_SECONDS:-20}
+seconds=${PZ_FUZZ_SECONDS:-45}
 fuzz_passed=0
 fuzz_failed=0
 for fuzzer in build-fuzz/fuzz_*; do
