@@ -22,26 +22,10 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
+#include "internal.h"
 
 #include <stdlib.h>
 #include <string.h>
-
-static int32_t find_root(int32_t *parent, int32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
-static void join(int32_t *parent, int32_t a, int32_t b)
-{
-    a = find_root(parent, a);
-    b = find_root(parent, b);
-    if (a != b)
-        parent[a > b ? a : b] = a < b ? a : b;
-}
 
 static char *copy_string(const char *text)
 {
@@ -99,14 +83,14 @@ static int32_t assign_cut_vertices(const pz_topology *t, const uint8_t *cut, int
         if (opposite < 0 || cut[e])
             continue;
         /* h runs a -> b and its twin b -> a: corner h (at a) meets next(twin), and vice versa. */
-        join(parent, h, pz_he_next(opposite));
-        join(parent, pz_he_next(h), opposite);
+        pz_union_find_join(parent, h, pz_he_next(opposite));
+        pz_union_find_join(parent, pz_he_next(h), opposite);
     }
     int32_t next_vertex = t->vertex_count;
     for (int32_t c = 0; c < t->halfedge_count; ++c)
         corner_vertex[c] = -1;
     for (int32_t c = 0; c < t->halfedge_count; ++c) {
-        int32_t root = find_root(parent, c);
+        int32_t root = pz_union_find_root(parent, c);
         if (corner_vertex[root] < 0) {
             int32_t v = t->faces[c];
             corner_vertex[root] = vertex_taken[v] ? next_vertex++ : v;

@@ -44,33 +44,12 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
+#include "internal.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
-
-/* ------------------------------------------------------------------------ */
-/* Growable arrays                                                           */
-/* ------------------------------------------------------------------------ */
-
-/* Makes room for `needed` elements of `size` bytes, doubling the capacity. */
-static int obj_reserve(void **data, size_t *capacity, size_t needed, size_t size)
-{
-    if (needed <= *capacity)
-        return 1;
-    size_t grown = *capacity ? *capacity : 256;
-    while (grown < needed)
-        grown *= 2;
-    if (grown > SIZE_MAX / size)
-        return 0;
-    void *bigger = realloc(*data, grown * size);
-    if (!bigger)
-        return 0;
-    *data = bigger;
-    *capacity = grown;
-    return 1;
-}
 
 /* ------------------------------------------------------------------------ */
 /* Group names -> labels (open addressing hash table)                        */
@@ -123,7 +102,7 @@ static int32_t obj_labels_find(obj_labels *labels, const char *name, size_t leng
             return labels->slots[slot] - 1;
     }
     if (labels->count >= INT32_MAX - 1 ||
-        !obj_reserve((void **)&labels->names, &labels->capacity, labels->count + 1, sizeof(char *)))
+        !pz_grow((void **)&labels->names, &labels->capacity, labels->count + 1, sizeof(char *)))
         return -1;
     char *copy = malloc(length + 1);
     if (!copy)
@@ -325,7 +304,7 @@ static pz_status obj_read_vertex(obj_reader *reader, const char *p, const char *
             return obj_fail(reader, "malformed vertex (expected v x y z)");
     if (reader->vertex_count >= INT32_MAX)
         return obj_fail(reader, "too many vertices");
-    if (!obj_reserve((void **)&reader->positions, &reader->position_capacity, 3 * reader->vertex_count + 3,
+    if (!pz_grow((void **)&reader->positions, &reader->position_capacity, 3 * reader->vertex_count + 3,
                      sizeof(double)))
         return obj_out_of_memory(reader);
     memcpy(reader->positions + 3 * reader->vertex_count++, xyz, sizeof xyz);
@@ -342,7 +321,7 @@ static pz_status obj_read_uv(obj_reader *reader, const char *p, const char *end)
         return obj_fail(reader, "malformed texture coordinate (expected vt u v)");
     if (reader->uv_count >= INT32_MAX)
         return obj_fail(reader, "too many texture coordinates");
-    if (!obj_reserve((void **)&reader->uvs, &reader->uv_capacity, 2 * reader->uv_count + 2, sizeof(double)))
+    if (!pz_grow((void **)&reader->uvs, &reader->uv_capacity, 2 * reader->uv_count + 2, sizeof(double)))
         return obj_out_of_memory(reader);
     memcpy(reader->uvs + 2 * reader->uv_count++, uv, sizeof uv);
     return PZ_OK;
@@ -411,9 +390,9 @@ static pz_status obj_add_fan(obj_reader *reader, size_t corner_count)
     size_t needed = reader->face_count + triangle_count;
     if (needed > INT32_MAX)
         return obj_fail(reader, "too many faces");
-    if (!obj_reserve((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)) ||
-        !obj_reserve((void **)&reader->corner_uvs, &reader->corner_uvs_capacity, 3 * needed, sizeof(int32_t)) ||
-        !obj_reserve((void **)&reader->face_labels, &reader->face_labels_capacity, needed, sizeof(int32_t)))
+    if (!pz_grow((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)) ||
+        !pz_grow((void **)&reader->corner_uvs, &reader->corner_uvs_capacity, 3 * needed, sizeof(int32_t)) ||
+        !pz_grow((void **)&reader->face_labels, &reader->face_labels_capacity, needed, sizeof(int32_t)))
         return obj_out_of_memory(reader);
     const int32_t *vertices = reader->polygon_vertices, *uvs = reader->polygon_uvs;
     for (size_t t = 0; t < triangle_count; ++t) {
@@ -430,9 +409,9 @@ static pz_status obj_read_face(obj_reader *reader, const char *p, const char *en
 {
     size_t corner_count = 0;
     for (p = obj_skip_space(p, end); p < end; p = obj_skip_space(p, end)) {
-        if (!obj_reserve((void **)&reader->polygon_vertices, &reader->polygon_capacity, corner_count + 1,
+        if (!pz_grow((void **)&reader->polygon_vertices, &reader->polygon_capacity, corner_count + 1,
                          sizeof(int32_t)) ||
-            !obj_reserve((void **)&reader->polygon_uvs, &reader->polygon_uv_capacity, corner_count + 1,
+            !pz_grow((void **)&reader->polygon_uvs, &reader->polygon_uv_capacity, corner_count + 1,
                          sizeof(int32_t)))
             return obj_out_of_memory(reader);
         int32_t vertex = 0, uv = -1;

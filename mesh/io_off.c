@@ -21,6 +21,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
+#include "internal.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -42,23 +43,6 @@ typedef struct off_reader {
 static int off_is_space(char c)
 {
     return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f';
-}
-
-static int off_reserve(void **data, size_t *capacity, size_t needed, size_t size)
-{
-    if (needed <= *capacity)
-        return 1;
-    size_t grown = *capacity ? *capacity : 64;
-    while (grown < needed)
-        grown *= 2;
-    if (grown > SIZE_MAX / size)
-        return 0;
-    void *bigger = realloc(*data, grown * size);
-    if (!bigger)
-        return 0;
-    *data = bigger;
-    *capacity = grown;
-    return 1;
 }
 
 static pz_status off_fail(off_reader *reader, const char *problem)
@@ -212,7 +196,7 @@ static pz_status off_read_face(off_reader *reader, const char *line, const char 
     /* Every corner needs two characters of this line, which bounds the scratch polygon. */
     if (corner_count > (line_end - line + 1) / 2)
         return off_fail(reader, "face has fewer indices than it declares");
-    if (!off_reserve((void **)&reader->polygon, &reader->polygon_capacity, (size_t)corner_count, sizeof(int32_t)))
+    if (!pz_grow((void **)&reader->polygon, &reader->polygon_capacity, (size_t)corner_count, sizeof(int32_t)))
         return off_out_of_memory(reader);
     for (int64_t k = 0; k < corner_count; ++k) {
         if (!off_parse_index(&line, line_end, &index))
@@ -225,7 +209,7 @@ static pz_status off_read_face(off_reader *reader, const char *line, const char 
     size_t needed = reader->face_count + (size_t)corner_count - 2;
     if (needed > INT32_MAX)
         return off_fail(reader, "too many faces");
-    if (!off_reserve((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)))
+    if (!pz_grow((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)))
         return off_out_of_memory(reader);
     for (int64_t t = 0; t + 2 < corner_count; ++t) {
         int32_t *corners = reader->faces + 3 * reader->face_count++;

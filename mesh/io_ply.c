@@ -37,6 +37,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
+#include "internal.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -109,23 +110,6 @@ static size_t ply_type_size(ply_type type)
 {
     static const size_t sizes[] = {0, 1, 1, 2, 2, 4, 4, 4, 8};
     return sizes[type];
-}
-
-static int ply_reserve(void **data, size_t *capacity, size_t needed, size_t size)
-{
-    if (needed <= *capacity)
-        return 1;
-    size_t grown = *capacity ? *capacity : 64;
-    while (grown < needed)
-        grown *= 2;
-    if (grown > SIZE_MAX / size)
-        return 0;
-    void *bigger = realloc(*data, grown * size);
-    if (!bigger)
-        return 0;
-    *data = bigger;
-    *capacity = grown;
-    return 1;
 }
 
 static pz_status ply_out_of_memory(ply_reader *reader)
@@ -205,7 +189,7 @@ static pz_status ply_add_element(ply_reader *reader, const ply_token *tokens, si
     int64_t count;
     if (token_count != 3 || !ply_parse_count(tokens[2], &count))
         return ply_header_error(reader, line, "malformed element (expected: element NAME COUNT)");
-    if (!ply_reserve((void **)&reader->elements, &reader->element_capacity, reader->element_count + 1,
+    if (!pz_grow((void **)&reader->elements, &reader->element_capacity, reader->element_count + 1,
                      sizeof(ply_element)))
         return ply_out_of_memory(reader);
     ply_element *element = &reader->elements[reader->element_count++];
@@ -270,7 +254,7 @@ static pz_status ply_add_property(ply_reader *reader, const ply_token *tokens, s
             return ply_header_error(reader, line, "unknown property type");
     }
     property.role = ply_choose_role(element, tokens[token_count - 1], is_list);
-    if (!ply_reserve((void **)&element->properties, &element->property_capacity, element->property_count + 1,
+    if (!pz_grow((void **)&element->properties, &element->property_capacity, element->property_count + 1,
                      sizeof(ply_property)))
         return ply_out_of_memory(reader);
     element->properties[element->property_count++] = property;
@@ -289,7 +273,7 @@ static pz_status ply_add_label_name(ply_reader *reader, const ply_token *tokens,
         --name_end;
     size_t length = (size_t)(name_end - tokens[3].start);
     char *name = malloc(length + 1);
-    if (!name || !ply_reserve((void **)&reader->label_names, &reader->label_name_capacity,
+    if (!name || !pz_grow((void **)&reader->label_names, &reader->label_name_capacity,
                               reader->label_name_count + 1, sizeof(ply_label_name))) {
         free(name);
         return ply_out_of_memory(reader);
@@ -485,8 +469,8 @@ static pz_status ply_add_polygon(ply_reader *reader, size_t corner_count, int64_
     size_t needed = reader->face_count + corner_count - 2;
     if (needed > INT32_MAX)
         return pz_error(reader->ctx, PZ_ERR_DATA, "%s: too many faces", reader->name);
-    if (!ply_reserve((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)) ||
-        !ply_reserve((void **)&reader->face_labels, &reader->face_labels_capacity, needed, sizeof(int64_t)))
+    if (!pz_grow((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)) ||
+        !pz_grow((void **)&reader->face_labels, &reader->face_labels_capacity, needed, sizeof(int64_t)))
         return ply_out_of_memory(reader);
     for (size_t t = 0; t + 2 < corner_count; ++t) {
         /* Indices are checked against the vertex count once every element has been read. */
@@ -511,7 +495,7 @@ static int64_t ply_read_list(ply_reader *reader, const ply_property *property, i
         return ply_skip_values(reader, property->type, count) ? count : -1;
     /* Each item takes at least one byte, which bounds the scratch polygon by the data size. */
     if ((uint64_t)count > (size_t)(reader->end - reader->cursor) ||
-        !ply_reserve((void **)&reader->polygon, &reader->polygon_capacity, (size_t)count + 1, sizeof(int64_t)))
+        !pz_grow((void **)&reader->polygon, &reader->polygon_capacity, (size_t)count + 1, sizeof(int64_t)))
         return -1;
     for (int64_t i = 0; i < count; ++i) {
         double index;

@@ -323,6 +323,13 @@ void pz_loops_free(pz_loops **loops);
  */
 int32_t pz_topology_components(const pz_topology *topology, int32_t *face_component, pz_ctx *ctx);
 
+/**
+ * The same on any mesh, without connectivity (so also on one that failed
+ * validation): corners with an out-of-range index are skipped, and a face
+ * with none in range gets component -1. face_component may be NULL.
+ */
+int32_t pz_mesh_face_components(const pz_mesh *mesh, int32_t *face_component, pz_ctx *ctx);
+
 /** Topological summary of a mesh. */
 typedef struct pz_topology_summary {
     int32_t vertex_count, edge_count, face_count;

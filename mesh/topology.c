@@ -24,6 +24,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
+#include "internal.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -298,57 +299,67 @@ pz_status pz_topology_boundary_loops(const pz_topology *topology, pz_loops **out
     return PZ_OK;
 }
 
-static int32_t find_root(int32_t *parent, int32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];  /* path halving keeps the trees flat */
-        x = parent[x];
-    }
-    return x;
-}
-
 /* Union-find over vertices (the three corners of a face are joined), so
  * faces touching at a single vertex share a component. Components are
  * numbered in order of their first face. */
-int32_t pz_topology_components(const pz_topology *topology, int32_t *face_component, pz_ctx *ctx)
+/*
+ * Faces sharing a vertex are one component: union-find over the corners of
+ * every face, O(F alpha(V)). Corners out of range are skipped, so this works
+ * on meshes that failed validation too; a face with no corner in range gets
+ * component -1.
+ */
+static int32_t face_components(const int32_t *faces, int32_t face_count, int32_t vertex_count,
+                               int32_t *face_component, pz_ctx *ctx)
 {
-    const pz_topology *t = topology;
-    int32_t *parent = malloc((size_t)t->vertex_count * sizeof(int32_t) + 1);
-    int32_t *label = malloc((size_t)t->vertex_count * sizeof(int32_t) + 1);
+    int32_t *parent = malloc((size_t)vertex_count * sizeof(int32_t) + 1);
+    int32_t *label = malloc((size_t)vertex_count * sizeof(int32_t) + 1);
     if (!parent || !label) {
         free(parent);
         free(label);
-        return pz_error(ctx, PZ_ERR_NOMEM, "out of memory for the components of %d vertices", (int)t->vertex_count);
+        return pz_error(ctx, PZ_ERR_NOMEM, "out of memory for the components of %d vertices", (int)vertex_count);
     }
-    for (int32_t v = 0; v < t->vertex_count; ++v) {
+    for (int32_t v = 0; v < vertex_count; ++v) {
         parent[v] = v;
         label[v] = -1;
     }
-    for (int32_t f = 0; f < t->face_count; ++f) {
-        int32_t root = find_root(parent, t->faces[3 * f]);
-        for (int k = 1; k < 3; ++k) {
-            int32_t other = find_root(parent, t->faces[3 * f + k]);
-            if (other != root) {
-                /* Hang the larger index under the smaller one: deterministic. */
-                if (other < root) {
-                    parent[root] = other;
-                    root = other;
-                } else {
-                    parent[other] = root;
-                }
-            }
+    for (int32_t f = 0; f < face_count; ++f) {
+        int32_t first = -1;
+        for (int k = 0; k < 3; ++k) {
+            int32_t v = faces[3 * f + k];
+            if (v < 0 || v >= vertex_count)
+                continue;
+            if (first < 0)
+                first = v;
+            else
+                pz_union_find_join(parent, first, v);
         }
     }
     int32_t component_count = 0;
-    for (int32_t f = 0; f < t->face_count; ++f) {
-        int32_t root = find_root(parent, t->faces[3 * f]);
-        if (label[root] < 0)
+    for (int32_t f = 0; f < face_count; ++f) {
+        int32_t root = -1;
+        for (int k = 0; k < 3 && root < 0; ++k) {
+            int32_t v = faces[3 * f + k];
+            if (v >= 0 && v < vertex_count)
+                root = pz_union_find_root(parent, v);
+        }
+        if (root >= 0 && label[root] < 0)
             label[root] = component_count++;
-        face_component[f] = label[root];
+        if (face_component)
+            face_component[f] = root >= 0 ? label[root] : -1;
     }
     free(parent);
     free(label);
     return component_count;
+}
+
+int32_t pz_topology_components(const pz_topology *topology, int32_t *face_component, pz_ctx *ctx)
+{
+    return face_components(topology->faces, topology->face_count, topology->vertex_count, face_component, ctx);
+}
+
+int32_t pz_mesh_face_components(const pz_mesh *mesh, int32_t *face_component, pz_ctx *ctx)
+{
+    return face_components(mesh->faces, mesh->face_count, mesh->vertex_count, face_component, ctx);
 }
 
 /* chi = V - E + F is additive over components and so is the boundary loop

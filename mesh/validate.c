@@ -36,6 +36,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
+#include "internal.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -273,23 +274,6 @@ static void find_duplicates(const pz_mesh *mesh, const edge_groups *groups, uint
     }
 }
 
-static int32_t find_root(int32_t *parent, int32_t x)
-{
-    while (parent[x] != x) {
-        parent[x] = parent[parent[x]];
-        x = parent[x];
-    }
-    return x;
-}
-
-static void join(int32_t *parent, int32_t a, int32_t b)
-{
-    a = find_root(parent, a);
-    b = find_root(parent, b);
-    if (a != b)
-        parent[a > b ? a : b] = a < b ? a : b;
-}
-
 /* The corner of half-edge h's face that sits at vertex v (v an end of h). */
 static int32_t corner_at(const int32_t *faces, int32_t h, int32_t v)
 {
@@ -321,8 +305,8 @@ static void check_edges(const pz_mesh *mesh, const edge_groups *groups, const ui
                     first->nonmanifold_edge[1] = high;
                 }
             } else if (count == 2) {
-                join(corner_parent, corner_at(faces, pair[0], low), corner_at(faces, pair[1], low));
-                join(corner_parent, corner_at(faces, pair[0], high), corner_at(faces, pair[1], high));
+                pz_union_find_join(corner_parent, corner_at(faces, pair[0], low), corner_at(faces, pair[1], low));
+                pz_union_find_join(corner_parent, corner_at(faces, pair[0], high), corner_at(faces, pair[1], high));
                 if (faces[pair[0]] == faces[pair[1]] && out->inconsistent_edges++ == 0) {
                     first->inconsistent_edge[0] = low;
                     first->inconsistent_edge[1] = high;
@@ -338,7 +322,7 @@ static void check_fans(const pz_mesh *mesh, const uint8_t *face_flags, uint8_t *
                        int32_t *corner_parent, pz_validation *out, first_seen *first)
 {
     for (int32_t c = 0; c < 3 * mesh->face_count; ++c) {
-        if (face_flags[pz_he_face(c)] & (FACE_BAD | FACE_DUPLICATE) || find_root(corner_parent, c) != c)
+        if (face_flags[pz_he_face(c)] & (FACE_BAD | FACE_DUPLICATE) || pz_union_find_root(corner_parent, c) != c)
             continue;
         uint8_t *flags = vertex_flags + mesh->faces[c];
         *flags |= (*flags & VERTEX_FAN) ? VERTEX_FANS : VERTEX_FAN;

@@ -93,59 +93,25 @@ static void report_clear(mesh_report *report)
 
 /* ---------------------------------------------------------------- robust counts for invalid meshes */
 
-static int32_t find_root(int32_t *parent, int32_t v)
-{
-    while (parent[v] != v) {
-        parent[v] = parent[parent[v]]; /* path halving keeps the trees shallow */
-        v = parent[v];
-    }
-    return v;
-}
-
 static int vertex_in_range(const pz_mesh *mesh, int32_t v)
 {
     return v >= 0 && v < mesh->vertex_count;
 }
 
-/*
- * Components of faces sharing a vertex, by union-find over each face's
- * in-range corners, plus the number of vertices some face references.
- */
-static pz_status count_components(const pz_mesh *mesh, int32_t *component_count, int32_t *referenced_count,
-                                  pz_ctx *ctx)
+/* Vertices that some face references through an in-range index. */
+static pz_status count_referenced(const pz_mesh *mesh, int32_t *referenced_count, pz_ctx *ctx)
 {
-    int32_t *parent = malloc(((size_t)mesh->vertex_count + 1) * sizeof *parent);
     uint8_t *referenced = calloc((size_t)mesh->vertex_count + 1, 1);
-    if (!parent || !referenced) {
-        free(parent);
-        free(referenced);
-        return pz_error(ctx, PZ_ERR_NOMEM, "out of memory counting components");
-    }
+    if (!referenced)
+        return pz_error(ctx, PZ_ERR_NOMEM, "out of memory counting vertices");
+    for (int32_t c = 0; c < 3 * mesh->face_count; ++c)
+        if (vertex_in_range(mesh, mesh->faces[c]))
+            referenced[mesh->faces[c]] = 1;
+    int32_t total = 0;
     for (int32_t v = 0; v < mesh->vertex_count; ++v)
-        parent[v] = v;
-    for (int32_t f = 0; f < mesh->face_count; ++f) {
-        int32_t first = -1;
-        for (int k = 0; k < 3; ++k) {
-            int32_t v = mesh->faces[3 * f + k];
-            if (!vertex_in_range(mesh, v))
-                continue;
-            referenced[v] = 1;
-            if (first < 0)
-                first = v;
-            else
-                parent[find_root(parent, v)] = find_root(parent, first);
-        }
-    }
-    int32_t components = 0, referenced_total = 0;
-    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
-        referenced_total += referenced[v];
-        if (referenced[v] && find_root(parent, v) == v)
-            ++components;
-    }
-    free(parent);
+        total += referenced[v];
     free(referenced);
-    *component_count = components;
-    *referenced_count = referenced_total;
+    *referenced_count = total;
     return PZ_OK;
 }
 
@@ -232,7 +198,11 @@ static pz_status analyse_topology(mesh_report *report, pz_ctx *ctx)
 static pz_status analyse_robustly(mesh_report *report, pz_ctx *ctx)
 {
     int32_t referenced_count = 0;
-    pz_status status = count_components(report->mesh, &report->component_count, &referenced_count, ctx);
+    int32_t component_count = pz_mesh_face_components(report->mesh, NULL, ctx);
+    if (component_count < 0)
+        return (pz_status)component_count;
+    report->component_count = component_count;
+    pz_status status = count_referenced(report->mesh, &referenced_count, ctx);
     if (status == PZ_OK)
         status = count_edges(report->mesh, &report->edge_count, ctx);
     if (status == PZ_OK)

@@ -1,0 +1,54 @@
+/*
+ * mesh/internal.h -- small helpers shared by the files of mesh/ (not public).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_MESH_INTERNAL_H
+#define PZ_MESH_INTERNAL_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <stdlib.h>
+
+/*
+ * Makes room for `needed` elements of `element_size` bytes in *data, doubling
+ * the capacity (from 64) so that n appends cost O(n). Returns 0 when out of
+ * memory or when the size would overflow; *data is then unchanged.
+ */
+static inline int pz_grow(void **data, size_t *capacity, size_t needed, size_t element_size)
+{
+    if (needed <= *capacity)
+        return 1;
+    size_t grown = *capacity ? *capacity : 64;
+    while (grown < needed)
+        grown *= 2;
+    if (grown > SIZE_MAX / element_size)
+        return 0;
+    void *bigger = realloc(*data, grown * element_size);
+    if (!bigger)
+        return 0;
+    *data = bigger;
+    *capacity = grown;
+    return 1;
+}
+
+/* Union-find over int32 ids with path halving; parent[x] == x marks a root. */
+static inline int32_t pz_union_find_root(int32_t *parent, int32_t x)
+{
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    return x;
+}
+
+/* Joins the sets of a and b; the smaller root id wins, so results are deterministic. */
+static inline void pz_union_find_join(int32_t *parent, int32_t a, int32_t b)
+{
+    a = pz_union_find_root(parent, a);
+    b = pz_union_find_root(parent, b);
+    if (a != b)
+        parent[a > b ? a : b] = a < b ? a : b;
+}
+
+#endif /* PZ_MESH_INTERNAL_H */
