@@ -5,6 +5,11 @@
  * REQUIRE stops the test. A test's main ends with `return test_finish();`
  * which prints "N passed, M failed" and returns 1 when anything failed.
  * test_skip("why") prints the reason and exits 77 (ctest's SKIP_RETURN_CODE).
+ * REQUIRE_OK(call, ctx) requires a pz_status call to return PZ_OK.
+ * test_strdup copies a string (REQUIRE on out of memory).
+ *
+ * Mesh fixtures and reader checks are in test_meshes.h, scratch directories
+ * and whole files in test_files.h.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -13,6 +18,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static int test_checks_passed;
 static int test_checks_failed;
@@ -39,6 +45,11 @@ static int test_check_result; /* the last CHECK's outcome: REQUIRE must not eval
         }                                                                  \
     } while (0)
 
+/* REQUIRE_OK(call, ctx): `call` (evaluated once) must return PZ_OK; the failure
+ * message names the call and gives ctx.error (ctx is a pz_ctx, not a pointer).
+ * Needs mesh/mesh.h. */
+#define REQUIRE_OK(call, ctx) REQUIRE((call) == PZ_OK, "%s: %s", #call, (ctx).error)
+
 static inline int test_finish(void)
 {
     printf("%d passed, %d failed\n", test_checks_passed, test_checks_failed);
@@ -51,11 +62,31 @@ static inline void test_skip(const char *why)
     exit(77);
 }
 
-/* Directory of the shared real meshes, or NULL when it is not there. */
+/* A malloc'd copy of text (free it); stops the test when out of memory. */
+static inline char *test_strdup(const char *text)
+{
+    char *copy = malloc(strlen(text) + 1);
+    REQUIRE(copy != NULL, "out of memory");
+    return strcpy(copy, text);
+}
+
+/*
+ * Directory of the shared real meshes, or NULL when it is not there (the
+ * variable unset, or no INVENTORY.md in it: a clone without ../shared).
+ */
 static inline const char *test_shared_data(void)
 {
     const char *dir = getenv("PZ_SHARED_DATA");
-    return dir && *dir ? dir : NULL;
+    if (!dir || !*dir)
+        return NULL;
+    char inventory[4096];
+    if (snprintf(inventory, sizeof inventory, "%s/INVENTORY.md", dir) >= (int)sizeof inventory)
+        return NULL;
+    FILE *file = fopen(inventory, "r");
+    if (!file)
+        return NULL;
+    fclose(file);
+    return dir;
 }
 
 #endif

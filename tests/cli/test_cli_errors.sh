@@ -10,85 +10,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 
-BIN=${PZ_BINARY:-${PZ_BUILD_DIR:-build}/panelize}
-if [ ! -x "$BIN" ]; then
-    echo "SKIPPED: no panelize binary at $BIN"
-    exit 77
-fi
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
-cd "$WORK" || exit 1
-
-passed=0
-failed=0
-pass() { passed=$((passed + 1)); }
-fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
-check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
-    local what=$1; shift
-    if "$@"; then pass; else fail "$what"; fi
-}
-
-# run ARGS...: runs panelize, stdout in $WORK/out, stderr in $WORK/err, exit code in $rc.
-run() { "$BIN" "$@" >"$WORK/out" 2>"$WORK/err"; rc=$?; }
-
-# json_checks WHAT DESCRIPTION EXPR [DESCRIPTION EXPR]...: evaluates each Python
-# expression over the JSON on stdout (bound to d; json and re imported) in ONE
-# interpreter run, since starting python3 costs more than the runs under test.
-json_checks() {
-    local what=$1 line
-    shift
-    while read -r line; do
-        case $line in
-            PASS) pass ;;
-            *) fail "$what: ${line#FAIL }" ;;
-        esac
-    done < <(python3 - "$WORK/out" "$@" <<'PY'
-import json, re, sys
-try:
-    d = json.load(open(sys.argv[1]))
-except Exception as error:
-    d = None
-    print("FAIL stdout is not JSON: %s" % error)
-pairs = sys.argv[2:]
-for description, expression in zip(pairs[0::2], pairs[1::2]):
-    try:
-        ok = d is not None and bool(eval(expression))
-    except Exception:
-        ok = False
-    print("PASS" if ok else "FAIL " + description)
-PY
-)
-}
-
-# json_true EXPR: evaluates a Python expression over the JSON on stdout (bound to d).
-json_true() {
-    python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if eval(sys.argv[2]) else 1)' \
-        "$WORK/out" "$1" 2>/dev/null
-}
-
-no_temporaries() { [ -z "$(find "$WORK" -name '*.tmp-*' -print -quit)" ]; }
-
-# expect_error CODE NAME [--absent FILE]... -- ARGS...: the run fails with CODE,
-# one stderr line "panelize: ...NAME...", FILEs absent, no temporaries.
-expect_error() {
-    local code=$1 name=$2 what
-    shift 2
-    local absent=()
-    while [ "$1" != "--" ]; do absent+=("$2"); shift 2; done
-    shift
-    what="panelize $*"
-    run "$@"
-    check "$what: exit $rc, expected $code" [ "$rc" -eq "$code" ]
-    check "$what: stderr is not one line: $(cat "$WORK/err")" [ "$(wc -l <"$WORK/err")" -eq 1 ]
-    check "$what: stderr does not start with 'panelize: '" grep -q '^panelize: ' "$WORK/err"
-    check "$what: stderr does not name '$name': $(cat "$WORK/err")" grep -qF -- "$name" "$WORK/err"
-    check "$what: wrote to stdout" [ ! -s "$WORK/out" ]
-    check "$what: left a temporary file" no_temporaries
-    local file
-    for file in "${absent[@]}"; do
-        check "$what: left $file behind" [ ! -e "$file" ]
-    done
-}
+source "$(dirname "$0")/lib.sh"
 
 # expect_described FILE KEYWORD: info exits 0 and reports the mesh as not
 # manifold, with a problem mentioning KEYWORD (a Python regex, case-insensitive).
@@ -207,5 +129,4 @@ check "info unreferenced.obj: should be manifold with the note listed" \
 run check unreferenced.obj --quiet
 check "check unreferenced.obj: exit $rc" [ "$rc" -eq 0 ]
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

@@ -6,65 +6,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 
-BIN=${PZ_BINARY:-${PZ_BUILD_DIR:-build}/panelize}
-if [ ! -x "$BIN" ]; then
-    echo "SKIPPED: no panelize binary at $BIN"
-    exit 77
-fi
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
-cd "$WORK" || exit 1
-
-passed=0
-failed=0
-pass() { passed=$((passed + 1)); }
-fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
-check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
-    local what=$1; shift
-    if "$@"; then pass; else fail "$what"; fi
-}
-
-# run ARGS...: runs panelize, stdout in $WORK/out, stderr in $WORK/err, exit code in $rc.
-run() { "$BIN" "$@" >"$WORK/out" 2>"$WORK/err"; rc=$?; }
-
-# json_checks WHAT DESCRIPTION EXPR [DESCRIPTION EXPR]...: evaluates each Python
-# expression over the JSON on stdout (bound to d; json and re imported) in ONE
-# interpreter run, since starting python3 costs more than the runs under test.
-json_checks() {
-    local what=$1 line
-    shift
-    while read -r line; do
-        case $line in
-            PASS) pass ;;
-            *) fail "$what: ${line#FAIL }" ;;
-        esac
-    done < <(python3 - "$WORK/out" "$@" <<'PY'
-import json, re, sys
-try:
-    d = json.load(open(sys.argv[1]))
-except Exception as error:
-    d = None
-    print("FAIL stdout is not JSON: %s" % error)
-pairs = sys.argv[2:]
-for description, expression in zip(pairs[0::2], pairs[1::2]):
-    try:
-        ok = d is not None and bool(eval(expression))
-    except Exception:
-        ok = False
-    print("PASS" if ok else "FAIL " + description)
-PY
-)
-}
-
-# json_true EXPR: evaluates a Python expression over the JSON on stdout (bound to d).
-json_true() {
-    python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if eval(sys.argv[2]) else 1)' \
-        "$WORK/out" "$1" 2>/dev/null
-}
-
-expect_ok() { check "$1: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]; }
-one_line() { [ "$(wc -l <"$1")" -eq 1 ]; }
-no_temporaries() { [ -z "$(find "$WORK" -name '*.tmp-*' -print -quit)" ]; }
+source "$(dirname "$0")/lib.sh"
 
 # ------------------------------------------------------------------ version and help
 run --version
@@ -147,5 +89,4 @@ run generate sleeve --poses 3 -o sleeve3.glb --faces 800 --json --quiet
 check "glb keeps poses inside" json_true "d['poses'] == 3 and d['pose_files'] == []"
 check "no pose files for glb" test ! -e sleeve3.pose1.glb
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

@@ -7,66 +7,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 
-BIN=${PZ_BINARY:-${PZ_BUILD_DIR:-build}/panelize}
-if [ ! -x "$BIN" ]; then
-    echo "SKIPPED: no panelize binary at $BIN"
-    exit 77
-fi
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
-cd "$WORK" || exit 1
-
-passed=0
-failed=0
-pass() { passed=$((passed + 1)); }
-fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
-check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
-    local what=$1; shift
-    if "$@"; then pass; else fail "$what"; fi
-}
-
-differ() { ! cmp -s "$1" "$2"; }
-
-# run ARGS...: runs panelize, stdout in $WORK/out, stderr in $WORK/err, exit code in $rc.
-run() { "$BIN" "$@" >"$WORK/out" 2>"$WORK/err"; rc=$?; }
-
-# json_checks WHAT DESCRIPTION EXPR [DESCRIPTION EXPR]...: evaluates each Python
-# expression over the JSON on stdout (bound to d; json and re imported) in ONE
-# interpreter run, since starting python3 costs more than the runs under test.
-json_checks() {
-    local what=$1 line
-    shift
-    while read -r line; do
-        case $line in
-            PASS) pass ;;
-            *) fail "$what: ${line#FAIL }" ;;
-        esac
-    done < <(python3 - "$WORK/out" "$@" <<'PY'
-import json, re, sys
-try:
-    d = json.load(open(sys.argv[1]))
-except Exception as error:
-    d = None
-    print("FAIL stdout is not JSON: %s" % error)
-pairs = sys.argv[2:]
-for description, expression in zip(pairs[0::2], pairs[1::2]):
-    try:
-        ok = d is not None and bool(eval(expression))
-    except Exception:
-        ok = False
-    print("PASS" if ok else "FAIL " + description)
-PY
-)
-}
-
-# json_true EXPR [FILE]: evaluates a Python expression over a JSON file (bound to d).
-json_true() {
-    python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if eval(sys.argv[2]) else 1)' \
-        "${2:-$WORK/out}" "$1" 2>/dev/null
-}
-
-# expect_ok WHAT: the last run exited 0.
-expect_ok() { check "$1: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]; }
+source "$(dirname "$0")/lib.sh"
 
 keys='["file","vertices","faces","edges","components","boundary_loops","boundary_loop_lengths_mm","genus",
 "euler_characteristic","manifold","problems","poses","units","units_guessed","bbox_mm","area_mm2","uvs",
@@ -154,6 +95,15 @@ check "--units cm should scale by 10 instead of 1000" \
     json_true "abs(max(d['bbox_mm']['size']) * 100 - max(json.load(open('mm.json'))['bbox_mm']['size'])) < 1e-2"
 run info mm.obj --units=mm --json --quiet
 check "--units=mm form: not given mm" json_true "d['units'] == 'mm' and d['units_guessed'] is False"
+check "a 400 mm cylinder in mm is a plausible garment size" json_true "d['units_plausible'] is True"
+# 40 units tall: 40 mm, 400 mm or 40 m. The guess (cm: 400 mm) fits; at 1/10 (4 units) nothing fits.
+awk '$1 == "v" { printf "v %.9g %.9g %.9g\n", $2 / 100, $3 / 100, $4 / 100; next } { print }' mm.obj >tiny.obj
+run info tiny.obj --json
+expect_ok "info tiny.obj"
+check "4 units tall fits no unit: units_plausible false" json_true "d['units_plausible'] is False"
+check "an implausible guess warns on stderr, naming the file" grep -q "tiny.obj: warning: units guessed" "$WORK/err"
+run info tiny.obj --units m --json
+check "--units silences the units warning" [ ! -s "$WORK/err" ]
 
 # ------------------------------------------------------------------ poses
 run generate bodice --poses 2 -o posed.glb --faces 1000 --quiet
@@ -196,5 +146,4 @@ else
     echo "skipped the real garments: PZ_SHARED_DATA is not set or has no garments/"
 fi
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+finish

@@ -8,22 +8,16 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
+#include "fuzz_util.h"
 
 #include <string.h>
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
-    int binary = size >= 4 && memcmp(data, "glTF", 4) == 0;
+    fuzz_ctx_init(&ctx);
     pz_mesh *mesh = NULL;
-    if (pz_gltf_read_memory(data, size, binary, NULL, "fuzz", &mesh, &ctx) == PZ_OK) {
-        pz_validation validation;
-        if (pz_mesh_validate(mesh, &validation, &ctx) == PZ_OK)
-            pz_validation_clear(&validation);
-        pz_mesh_free(&mesh);
-    }
-    return 0;
+    int binary = size >= 4 && memcmp(data, "glTF", 4) == 0;
+    pz_status status = pz_gltf_read_memory(data, size, binary, NULL, "fuzz", &mesh, &ctx);
+    return fuzz_end(status, &mesh, &ctx);
 }

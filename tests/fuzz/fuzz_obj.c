@@ -6,24 +6,13 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-
-#include <stddef.h>
-#include <stdint.h>
-
-int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+#include "fuzz_util.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    fuzz_ctx_init(&ctx);
     pz_mesh *mesh = NULL;
-    if (pz_obj_read_memory((const char *)data, size, "fuzz.obj", &mesh, &ctx) == PZ_OK) {
-        pz_validation validation;
-        if (pz_mesh_validate(mesh, &validation, &ctx) == PZ_OK)
-            pz_validation_clear(&validation);
-        pz_mesh_free(&mesh);
-    }
-    return 0;
+    pz_status status = pz_obj_read_memory((const char *)data, size, "fuzz.obj", &mesh, &ctx);
+    return fuzz_end(status, &mesh, &ctx);
 }

@@ -6,27 +6,11 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_meshes.h"
 
-#include <math.h>
 #include <string.h>
 
 static pz_ctx ctx;
-
-#define REQUIRE_OK(call)                                                  \
-    do {                                                                  \
-        pz_status call_status = (call);                                   \
-        REQUIRE(call_status == PZ_OK, "%s: %s", #call, ctx.error);        \
-    } while (0)
-
-static char *copy_text(const char *text)
-{
-    char *copy = malloc(strlen(text) + 1);
-    REQUIRE(copy, "out of memory");
-    strcpy(copy, text);
-    return copy;
-}
 
 /* Adds per-corner UVs (one per corner, (f, k)), labels (face parity, named)
  * and one pose (the rest pose shifted by +100 in z). */
@@ -40,8 +24,8 @@ static void decorate(pz_mesh *mesh)
     mesh->label_names = calloc(2, sizeof(char *));
     REQUIRE(mesh->uvs && mesh->corner_uvs && mesh->face_labels && mesh->label_names, "out of memory");
     mesh->label_count = 2;
-    mesh->label_names[0] = copy_text("front");
-    mesh->label_names[1] = copy_text("back");
+    mesh->label_names[0] = test_strdup("front");
+    mesh->label_names[1] = test_strdup("back");
     for (int32_t c = 0; c < corners; ++c) {
         mesh->corner_uvs[c] = c;
         mesh->uvs[2 * c] = c / 3;
@@ -53,50 +37,16 @@ static void decorate(pz_mesh *mesh)
     REQUIRE(pose, "out of memory");
     for (int32_t i = 0; i < 3 * mesh->vertex_count; ++i)
         pose[i] = mesh->positions[i] + (i % 3 == 2 ? 100.0 : 0.0);
-    REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx));
+    REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx), ctx);
     free(pose);
-}
-
-/* A tube of `columns` around z and `rows` rows: vertex (i, j) = j * columns + i. */
-static pz_mesh *tube(int columns, int rows)
-{
-    pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_mesh_create(columns * (rows + 1), 2 * columns * rows, &mesh, &ctx));
-    for (int j = 0; j <= rows; ++j)
-        for (int i = 0; i < columns; ++i) {
-            double *p = mesh->positions + 3 * (j * columns + i);
-            p[0] = cos(2 * 3.14159265358979323846 * i / columns);
-            p[1] = sin(2 * 3.14159265358979323846 * i / columns);
-            p[2] = j;
-        }
-    int32_t *face = mesh->faces;
-    for (int j = 0; j < rows; ++j)
-        for (int i = 0; i < columns; ++i) {
-            int32_t a = j * columns + i, b = j * columns + (i + 1) % columns, c = a + columns, d = b + columns;
-            int32_t quad[6] = {a, b, d, a, d, c};
-            memcpy(face, quad, sizeof quad);
-            face += 6;
-        }
-    return mesh;
-}
-
-static pz_topology_summary summarize(const pz_mesh *mesh)
-{
-    pz_topology *topology = NULL;
-    pz_topology_summary summary = {0};
-    REQUIRE_OK(pz_topology_build(mesh, &topology, &ctx));
-    REQUIRE_OK(pz_topology_summarize(topology, &summary, &ctx));
-    pz_topology_free(&topology);
-    return summary;
 }
 
 static void test_cut_tube(void)
 {
     const int columns = 8, rows = 3;
-    pz_mesh *mesh = tube(columns, rows);
+    pz_mesh *mesh = test_grid(columns, rows, TEST_GRID_TUBE, 0, &ctx);
     decorate(mesh);
-    pz_topology *topology = NULL;
-    REQUIRE_OK(pz_topology_build(mesh, &topology, &ctx));
+    pz_topology *topology = test_topology(mesh, &ctx);
     /* Cut the vertical edges at angle 0: between (0, j) and (0, j + 1). */
     uint8_t *cut = calloc((size_t)topology->edge_count, 1);
     REQUIRE(cut, "out of memory");
@@ -112,11 +62,11 @@ static void test_cut_tube(void)
     CHECK(cut_count == rows, "%d cut edges", cut_count);
     pz_mesh *opened = NULL;
     int32_t *vertex_map = NULL;
-    REQUIRE_OK(pz_mesh_cut(mesh, topology, cut, &opened, &vertex_map, &ctx));
+    REQUIRE_OK(pz_mesh_cut(mesh, topology, cut, &opened, &vertex_map, &ctx), ctx);
     CHECK(opened->vertex_count == mesh->vertex_count + rows + 1, "vertices %d: one copy more per vertex on the line",
           (int)opened->vertex_count);
     CHECK(opened->face_count == mesh->face_count, "faces kept");
-    pz_topology_summary s = summarize(opened);
+    pz_topology_summary s = test_summary(opened, &ctx);
     CHECK(s.boundary_loop_count == 1 && s.euler_characteristic == 1 && s.genus == 0 && s.component_count == 1,
           "a disk: loops %d chi %d genus %d", (int)s.boundary_loop_count, (int)s.euler_characteristic, (int)s.genus);
     int map_ok = 1, copies_on_line = 1, faces_ok = 1, pose_ok = 1;
@@ -146,7 +96,7 @@ static void test_cut_tube(void)
     /* Cutting along nothing gives back the same mesh. */
     pz_mesh *same = NULL;
     memset(cut, 0, (size_t)topology->edge_count);
-    REQUIRE_OK(pz_mesh_cut(mesh, topology, cut, &same, NULL, &ctx));
+    REQUIRE_OK(pz_mesh_cut(mesh, topology, cut, &same, NULL, &ctx), ctx);
     CHECK(same->vertex_count == mesh->vertex_count &&
               memcmp(same->faces, mesh->faces, (size_t)mesh->face_count * 3 * sizeof(int32_t)) == 0,
           "an empty cut changes nothing");
@@ -154,10 +104,10 @@ static void test_cut_tube(void)
 
     /* Cutting every edge separates every face. */
     memset(cut, 1, (size_t)topology->edge_count);
-    REQUIRE_OK(pz_mesh_cut(mesh, topology, cut, &same, NULL, &ctx));
+    REQUIRE_OK(pz_mesh_cut(mesh, topology, cut, &same, NULL, &ctx), ctx);
     CHECK(same->vertex_count == 3 * mesh->face_count, "all edges cut: 3 vertices per face, got %d",
           (int)same->vertex_count);
-    s = summarize(same);
+    s = test_summary(same, &ctx);
     CHECK(s.component_count == mesh->face_count, "all edges cut: one component per face");
     pz_mesh_free(&same);
 
@@ -173,7 +123,7 @@ static void test_extract(void)
     /* Take the faces of the first half of the columns (i < 4) of the tube, in
      * reverse order, so the maps are not the identity. */
     const int columns = 8, rows = 2;
-    pz_mesh *mesh = tube(columns, rows);
+    pz_mesh *mesh = test_grid(columns, rows, TEST_GRID_TUBE, 0, &ctx);
     decorate(mesh);
     int32_t face_ids[16], count = 0;
     for (int32_t f = mesh->face_count - 1; f >= 0; --f)
@@ -182,7 +132,7 @@ static void test_extract(void)
     REQUIRE(count == 16, "16 faces chosen");
     pz_mesh *panel = NULL;
     int32_t *vertex_map = NULL, *face_map = NULL;
-    REQUIRE_OK(pz_mesh_extract(mesh, face_ids, count, &panel, &vertex_map, &face_map, &ctx));
+    REQUIRE_OK(pz_mesh_extract(mesh, face_ids, count, &panel, &vertex_map, &face_map, &ctx), ctx);
     CHECK(panel->face_count == 16 && panel->vertex_count == 15, "5 x 3 vertices, 16 faces: %d %d",
           (int)panel->vertex_count, (int)panel->face_count);
     int faces_ok = 1, positions_ok = 1, uvs_ok = 1, labels_ok = 1, pose_ok = 1, first_use = 1;
@@ -211,14 +161,14 @@ static void test_extract(void)
     CHECK(positions_ok && pose_ok && panel->pose_count == 1, "positions and pose follow the vertex map");
     CHECK(panel->uv_count == 48 && uvs_ok, "UVs compacted to the %d used, values kept", (int)panel->uv_count);
     CHECK(labels_ok && panel->label_count == 2 && strcmp(panel->label_names[0], "front") == 0, "labels carried");
-    pz_topology_summary s = summarize(panel);
+    pz_topology_summary s = test_summary(panel, &ctx);
     CHECK(s.boundary_loop_count == 1 && s.euler_characteristic == 1, "half a tube is a disk");
     free(vertex_map);
     free(face_map);
     pz_mesh_free(&panel);
 
     /* Maps are optional; a bad face id is a usage error with nothing allocated. */
-    REQUIRE_OK(pz_mesh_extract(mesh, face_ids, 2, &panel, NULL, NULL, &ctx));
+    REQUIRE_OK(pz_mesh_extract(mesh, face_ids, 2, &panel, NULL, NULL, &ctx), ctx);
     CHECK(panel->face_count == 2, "extract without maps");
     pz_mesh_free(&panel);
     int32_t bad_ids[2] = {0, 999};

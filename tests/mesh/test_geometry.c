@@ -7,45 +7,22 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_meshes.h"
 
 #include <math.h>
 #include <string.h>
 
 static pz_ctx ctx;
 
-#define REQUIRE_OK(call)                                                  \
-    do {                                                                  \
-        pz_status call_status = (call);                                   \
-        REQUIRE(call_status == PZ_OK, "%s: %s", #call, ctx.error);        \
-    } while (0)
-
-static const double PI = 3.14159265358979323846;
+static const double PI = TEST_PI;
 
 static int near(double a, double b, double tolerance) { return fabs(a - b) <= tolerance; }
-
-static pz_mesh *mesh_from(int32_t vertex_count, const double *positions, int32_t face_count, const int32_t *faces)
-{
-    pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_mesh_create(vertex_count, face_count, &mesh, &ctx));
-    memcpy(mesh->positions, positions, (size_t)vertex_count * 3 * sizeof(double));
-    memcpy(mesh->faces, faces, (size_t)face_count * 3 * sizeof(int32_t));
-    return mesh;
-}
-
-static pz_topology *build(const pz_mesh *mesh)
-{
-    pz_topology *topology = NULL;
-    REQUIRE_OK(pz_topology_build(mesh, &topology, &ctx));
-    return topology;
-}
 
 static void test_right_triangle(void)
 {
     static const double positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     static const int32_t faces[] = {0, 1, 2};
-    pz_mesh *mesh = mesh_from(3, positions, 1, faces);
+    pz_mesh *mesh = test_mesh_from(3, positions, 1, faces, &ctx);
     double area, normal[3], angles[3];
     pz_geom_face_areas(mesh, &area);
     pz_geom_face_normals(mesh, normal);
@@ -55,7 +32,7 @@ static void test_right_triangle(void)
     CHECK(normal[0] == 0 && normal[1] == 0 && near(normal[2], 1, 1e-15), "normal +z");
     CHECK(near(angles[0], PI / 2, 1e-15) && near(angles[1], PI / 4, 1e-15) && near(angles[2], PI / 4, 1e-15),
           "angles %g %g %g", angles[0], angles[1], angles[2]);
-    pz_topology *topology = build(mesh);
+    pz_topology *topology = test_topology(mesh, &ctx);
     double defect[3], e_dev[3], weights[3];
     pz_geom_angle_defect(mesh, topology, defect);
     pz_geom_developability(mesh, topology, e_dev);
@@ -86,7 +63,7 @@ static void test_needle(void)
 {
     double positions[] = {0, 0, 0, 1, 0, 0, 1, 1e-10, 0};
     static const int32_t faces[] = {0, 1, 2};
-    pz_mesh *mesh = mesh_from(3, positions, 1, faces);
+    pz_mesh *mesh = test_mesh_from(3, positions, 1, faces, &ctx);
     double angles[3];
     pz_geom_corner_angles(mesh, angles);
     CHECK(near(angles[0], 1e-10, 1e-20), "needle angle %.17g", angles[0]);
@@ -94,30 +71,10 @@ static void test_needle(void)
     pz_mesh_free(&mesh);
 }
 
-static pz_mesh *flat_grid(int columns, int rows)
-{
-    pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_mesh_create((columns + 1) * (rows + 1), 2 * columns * rows, &mesh, &ctx));
-    for (int j = 0; j <= rows; ++j)
-        for (int i = 0; i <= columns; ++i) {
-            mesh->positions[3 * (j * (columns + 1) + i)] = i;
-            mesh->positions[3 * (j * (columns + 1) + i) + 1] = j;
-        }
-    int32_t *face = mesh->faces;
-    for (int j = 0; j < rows; ++j)
-        for (int i = 0; i < columns; ++i) {
-            int32_t a = j * (columns + 1) + i, b = a + 1, c = a + columns + 1, d = c + 1;
-            int32_t quad[6] = {a, b, d, a, d, c};
-            memcpy(face, quad, sizeof quad);
-            face += 6;
-        }
-    return mesh;
-}
-
 static void test_flat_grid(void)
 {
-    pz_mesh *mesh = flat_grid(4, 3);
-    pz_topology *topology = build(mesh);
+    pz_mesh *mesh = test_grid(4, 3, TEST_GRID_FLAT, 0, &ctx);
+    pz_topology *topology = test_topology(mesh, &ctx);
     double defect[20], e_dev[20], *weights = malloc((size_t)topology->edge_count * sizeof(double));
     REQUIRE(weights, "out of memory");
     pz_geom_angle_defect(mesh, topology, defect);
@@ -170,10 +127,9 @@ static void test_flat_grid(void)
 
 static void test_closed_surfaces(void)
 {
-    static const double tetra_positions[] = {1, 1, 1, 1, -1, -1, -1, 1, -1, -1, -1, 1};
-    static const int32_t tetra_faces[] = {0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2};
-    pz_mesh *mesh = mesh_from(4, tetra_positions, 4, tetra_faces);
-    pz_topology *topology = build(mesh);
+    pz_mesh *mesh = test_tetrahedron(&ctx);
+    const double *tetra_positions = mesh->positions;
+    pz_topology *topology = test_topology(mesh, &ctx);
     double defect[8], e_dev[8], normals[12 * 3];
     pz_geom_angle_defect(mesh, topology, defect);
     double total = defect[0] + defect[1] + defect[2] + defect[3];
@@ -197,8 +153,8 @@ static void test_closed_surfaces(void)
     static const double cube_positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1};
     static const int32_t cube_faces[] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
                                          1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
-    mesh = mesh_from(8, cube_positions, 12, cube_faces);
-    topology = build(mesh);
+    mesh = test_mesh_from(8, cube_positions, 12, cube_faces, &ctx);
+    topology = test_topology(mesh, &ctx);
     pz_geom_angle_defect(mesh, topology, defect);
     pz_geom_developability(mesh, topology, e_dev);
     int corners_ok = 1;

@@ -24,7 +24,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_files.h"
 
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -33,46 +33,6 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <unistd.h>
-
-/* test_util's REQUIRE evaluates its condition twice: calls go through this. */
-#define REQUIRE_OK(call, ...)                  \
-    do {                                       \
-        pz_status required_status = (call);    \
-        REQUIRE(required_status == PZ_OK, __VA_ARGS__); \
-    } while (0)
-
-static char temp_dir[256];
-
-static void path_in_temp(char *out, size_t size, const char *file)
-{
-    snprintf(out, size, "%s/%s", temp_dir, file);
-}
-
-static unsigned char *read_file(const char *path, size_t *size)
-{
-    FILE *file = fopen(path, "rb");
-    if (!file)
-        return NULL;
-    fseek(file, 0, SEEK_END);
-    long length = ftell(file);
-    fseek(file, 0, SEEK_SET);
-    unsigned char *data = malloc((size_t)length + 1);
-    if (data && fread(data, 1, (size_t)length, file) != (size_t)length) {
-        free(data);
-        data = NULL;
-    }
-    fclose(file);
-    *size = (size_t)length;
-    return data;
-}
-
-static void write_file(const char *path, const void *data, size_t size)
-{
-    FILE *file = fopen(path, "wb");
-    REQUIRE(file, "cannot create %s", path);
-    fwrite(data, 1, size, file);
-    fclose(file);
-}
 
 static int close_to(double a, double b)
 {
@@ -102,7 +62,7 @@ static pz_mesh *make_grid(int with_uvs, int with_labels, int with_poses)
     pz_ctx ctx = {0};
     pz_mesh *mesh = NULL;
     int32_t grid_vertices = (GRID_X + 1) * (GRID_Y + 1);
-    REQUIRE_OK(pz_mesh_create(grid_vertices + 1, 2 * GRID_X * GRID_Y, &mesh, &ctx), "%s", ctx.error);
+    REQUIRE_OK(pz_mesh_create(grid_vertices + 1, 2 * GRID_X * GRID_Y, &mesh, &ctx), ctx);
     for (int j = 0; j <= GRID_Y; ++j)
         for (int i = 0; i <= GRID_X; ++i) {
             double *p = &mesh->positions[3 * grid_vertex(i, j)];
@@ -122,8 +82,8 @@ static pz_mesh *make_grid(int with_uvs, int with_labels, int with_poses)
         mesh->label_count = 3;
         mesh->face_labels = calloc((size_t)mesh->face_count, sizeof(int32_t));
         mesh->label_names = calloc(3, sizeof(char *));
-        mesh->label_names[0] = strdup("front");
-        mesh->label_names[1] = strdup("back");
+        mesh->label_names[0] = test_strdup("front");
+        mesh->label_names[1] = test_strdup("back");
     }
     /* UV index of (i, j) in island `half`: 4 columns x (GRID_Y + 1) rows each. */
     for (int half = 0; with_uvs && half < 2; ++half)
@@ -165,7 +125,7 @@ static pz_mesh *make_grid(int with_uvs, int with_labels, int with_poses)
                 pose[3 * v + 1] = rest[1] - 0.25 * v * p;
                 pose[3 * v + 2] = rest[2] + 0.5 * (v % 7) + 12.0 * p;
             }
-            REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx), "%s", ctx.error);
+            REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx), ctx);
         }
         free(pose);
     }
@@ -176,7 +136,7 @@ static pz_mesh *make_grid(int with_uvs, int with_labels, int with_poses)
 static pz_status read_glb(const char *path, pz_mesh **out, pz_ctx *ctx)
 {
     size_t size = 0;
-    unsigned char *data = read_file(path, &size);
+    unsigned char *data = test_read_file(path, &size);
     REQUIRE(data, "cannot read back %s", path);
     pz_status status = pz_gltf_read_memory(data, size, 1, NULL, path, out, ctx);
     free(data);
@@ -239,7 +199,7 @@ static void check_grid_round_trip(const pz_mesh *grid, const pz_mesh *got)
 static cJSON *glb_json(const char *path)
 {
     size_t size = 0;
-    unsigned char *data = read_file(path, &size);
+    unsigned char *data = test_read_file(path, &size);
     REQUIRE(data && size >= 20 && memcmp(data, "glTF", 4) == 0, "%s is not a GLB", path);
     uint32_t length, json_length;
     memcpy(&length, data + 8, 4);
@@ -361,7 +321,7 @@ static void test_grid_round_trip(void)
     pz_ctx ctx = {0};
     pz_mesh *grid = make_grid(1, 1, 1);
     char path[512];
-    path_in_temp(path, sizeof path, "grid.glb");
+    test_temp_path(path, sizeof path, "grid.glb");
     const uint32_t colours[2] = {0xff0000ffu, 0x00ff0080u};
     pz_write_options options = {0};
     options.label_colors = colours;
@@ -369,7 +329,7 @@ static void test_grid_round_trip(void)
     CHECK(pz_glb_write(grid, path, &options, &ctx) == PZ_OK, "write: %s", ctx.error);
 
     pz_mesh *got = NULL;
-    REQUIRE_OK(read_glb(path, &got, &ctx), "read: %s", ctx.error);
+    REQUIRE_OK(read_glb(path, &got, &ctx), ctx);
     check_grid_round_trip(grid, got);
     check_glb_structure(path);
     pz_mesh_free(&got);
@@ -381,7 +341,7 @@ static void test_grid_round_trip(void)
 
     /* Metadata that is not an object is refused, and nothing is written. */
     options.extras_json = "[1, 2";
-    path_in_temp(path, sizeof path, "bad_extras.glb");
+    test_temp_path(path, sizeof path, "bad_extras.glb");
     CHECK(pz_glb_write(grid, path, &options, &ctx) == PZ_ERR_USAGE, "bad extras accepted");
     CHECK(strstr(ctx.error, "bad_extras.glb") != NULL, "message without the path: %s", ctx.error);
     CHECK(access(path, F_OK) != 0, "file written despite the error");
@@ -389,15 +349,15 @@ static void test_grid_round_trip(void)
     /* Poses can be left out. */
     options.extras_json = NULL;
     options.write_poses = -1;
-    path_in_temp(path, sizeof path, "no_poses.glb");
+    test_temp_path(path, sizeof path, "no_poses.glb");
     CHECK(pz_glb_write(grid, path, &options, &ctx) == PZ_OK, "%s", ctx.error);
-    REQUIRE_OK(read_glb(path, &got, &ctx), "%s", ctx.error);
+    REQUIRE_OK(read_glb(path, &got, &ctx), ctx);
     CHECK(got->pose_count == 0 && got->poses == NULL, "poses written despite write_poses < 0");
     pz_mesh_free(&got);
 
     /* A face pointing outside the vertices is refused. */
     grid->faces[5] = grid->vertex_count;
-    path_in_temp(path, sizeof path, "bad_face.glb");
+    test_temp_path(path, sizeof path, "bad_face.glb");
     CHECK(pz_glb_write(grid, path, NULL, &ctx) == PZ_ERR_INVALID_MESH, "bad face accepted");
     pz_mesh_free(&grid);
 }
@@ -407,10 +367,10 @@ static void test_plain_round_trip(void)
     pz_ctx ctx = {0};
     pz_mesh *plain = make_grid(0, 0, 0);
     char path[512];
-    path_in_temp(path, sizeof path, "plain.glb");
+    test_temp_path(path, sizeof path, "plain.glb");
     CHECK(pz_glb_write(plain, path, NULL, &ctx) == PZ_OK, "write: %s", ctx.error);
     pz_mesh *got = NULL;
-    REQUIRE_OK(read_glb(path, &got, &ctx), "read: %s", ctx.error);
+    REQUIRE_OK(read_glb(path, &got, &ctx), ctx);
     check_same_geometry(plain, got, "plain");
     CHECK(got->face_labels == NULL && got->label_count == 0, "an unlabelled mesh came back with %d labels",
           (int)got->label_count);
@@ -523,7 +483,7 @@ static void test_hand_built_scene(void)
     size_t bin_size = scene_bin(bin), size = 0;
     unsigned char *glb = make_glb(scene_json, bin, bin_size, &size);
     pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_gltf_read_memory(glb, size, 1, NULL, "scene.glb", &mesh, &ctx), "%s", ctx.error);
+    REQUIRE_OK(pz_gltf_read_memory(glb, size, 1, NULL, "scene.glb", &mesh, &ctx), ctx);
     /* Triangle instances "child" and "mirror" (3 vertices each) and the strip (4); the unused mesh
        and the POINTS primitive add nothing. */
     CHECK(mesh->vertex_count == 10, "%d vertices, expected 10", (int)mesh->vertex_count);
@@ -627,35 +587,29 @@ static void test_bad_inputs(void)
     CHECK(pz_gltf_read_memory(glb, size, 1, NULL, "long.glb", &mesh, &ctx) == PZ_ERR_DATA, "long BIN accepted");
     free(glb);
 
-    char *text;
-    text = scene_variant("{\"bufferView\":1,\"componentType\":5123,\"count\":3",
-                         "{\"bufferView\":1,\"componentType\":5123,\"count\":4");
-    expect_data_error(text, "accessor past its view");
-    free(text);
-    text = scene_variant("\"byteOffset\":36,\"byteLength\":6", "\"byteOffset\":36,\"byteLength\":600");
-    expect_data_error(text, "view past its buffer");
-    free(text);
-    text = scene_variant("\"byteOffset\":92,\"byteLength\":4", "\"byteOffset\":90,\"byteLength\":4");
-    expect_data_error(text, "strip index out of range"); /* reads float bytes as indices */
-    free(text);
-    text = scene_variant("\"indices\":1,\"targets\":[{\"POSITION\":4}]", "\"indices\":1");
-    expect_data_error(text, "morph target count mismatch");
-    free(text);
-    text = scene_variant("\"children\":[1]", "\"children\":[1,0]");
-    expect_data_error(text, "node cycle");
-    free(text);
-    text = scene_variant("\"children\":[1]", "\"children\":[7]");
-    expect_data_error(text, "missing child");
-    free(text);
-    text = scene_variant("{\"componentType\":5126,\"count\":4,", "{\"componentType\":5126,\"count\":400000000,");
-    expect_data_error(text, "huge accessor without data");
-    free(text);
-    text = scene_variant("\"POSITION\":0},\"indices\":1", "\"NORMAL\":0},\"indices\":1");
-    expect_data_error(text, "no POSITION");
-    free(text);
-    text = scene_variant("\"scene\":0}", "\"scene\":0,\"extensionsRequired\":[\"KHR_draco_mesh_compression\"]}");
-    expect_data_error(text, "unsupported required extension");
-    free(text);
+    /* The scene with one piece of its JSON replaced, each a different fault. */
+    static const struct {
+        const char *from, *to, *what;
+    } variants[] = {
+        {"{\"bufferView\":1,\"componentType\":5123,\"count\":3", "{\"bufferView\":1,\"componentType\":5123,\"count\":4",
+         "accessor past its view"},
+        {"\"byteOffset\":36,\"byteLength\":6", "\"byteOffset\":36,\"byteLength\":600", "view past its buffer"},
+        /* reads float bytes as indices */
+        {"\"byteOffset\":92,\"byteLength\":4", "\"byteOffset\":90,\"byteLength\":4", "strip index out of range"},
+        {"\"indices\":1,\"targets\":[{\"POSITION\":4}]", "\"indices\":1", "morph target count mismatch"},
+        {"\"children\":[1]", "\"children\":[1,0]", "node cycle"},
+        {"\"children\":[1]", "\"children\":[7]", "missing child"},
+        {"{\"componentType\":5126,\"count\":4,", "{\"componentType\":5126,\"count\":400000000,",
+         "huge accessor without data"},
+        {"\"POSITION\":0},\"indices\":1", "\"NORMAL\":0},\"indices\":1", "no POSITION"},
+        {"\"scene\":0}", "\"scene\":0,\"extensionsRequired\":[\"KHR_draco_mesh_compression\"]}",
+         "unsupported required extension"},
+    };
+    for (size_t i = 0; i < sizeof variants / sizeof variants[0]; ++i) {
+        char *text = scene_variant(variants[i].from, variants[i].to);
+        expect_data_error(text, variants[i].what);
+        free(text);
+    }
 
     /* Deeply nested extras would overflow tinygltf's recursive conversion. */
     size_t depth = 100000;
@@ -679,9 +633,9 @@ static void test_external_files(void)
     unsigned char bin[112];
     scene_bin(bin);
     char path[512], sub[512];
-    path_in_temp(path, sizeof path, "ext.bin");
-    write_file(path, bin, 36);
-    path_in_temp(sub, sizeof sub, "sub");
+    test_temp_path(path, sizeof path, "ext.bin");
+    test_write_file(path, bin, 36);
+    test_temp_path(sub, sizeof sub, "sub");
     mkdir(sub, 0700);
     static const char *json_format =
         "{\"asset\":{\"version\":\"2.0\"},\"buffers\":[{\"uri\":\"%s\",\"byteLength\":36}],"
@@ -694,7 +648,7 @@ static void test_external_files(void)
     char cwd[512];
     int moved = getcwd(cwd, sizeof cwd) != NULL;
     REQUIRE(moved, "getcwd");
-    moved = chdir(temp_dir) == 0;
+    moved = chdir(test_temp_dir) == 0;
     REQUIRE(moved, "chdir");
     pz_mesh *mesh = NULL;
     CHECK(pz_gltf_read_memory((const unsigned char *)json, strlen(json), 0, NULL, "ext.gltf", &mesh, &ctx) ==
@@ -705,8 +659,8 @@ static void test_external_files(void)
     moved = chdir(cwd) == 0;
     REQUIRE(moved, "chdir back");
 
-    CHECK(pz_gltf_read_memory((const unsigned char *)json, strlen(json), 0, temp_dir, "ext.gltf", &mesh, &ctx) ==
-              PZ_OK,
+    CHECK(pz_gltf_read_memory((const unsigned char *)json, strlen(json), 0, test_temp_dir, "ext.gltf", &mesh,
+                              &ctx) == PZ_OK,
           "base_dir read failed: %s", ctx.error);
     CHECK(mesh && mesh->face_count == 1 && mesh->vertex_count == 3, "external triangle not read");
     pz_mesh_free(&mesh);
@@ -751,19 +705,19 @@ static void test_obj_glb_obj(void)
         "g top\n"
         "f 5/1 6/2 7/3 8/5\n";
     char obj_path[512], glb_path[512], back_path[512];
-    path_in_temp(obj_path, sizeof obj_path, "cube.obj");
-    path_in_temp(glb_path, sizeof glb_path, "cube.glb");
-    path_in_temp(back_path, sizeof back_path, "cube_back.obj");
-    write_file(obj_path, obj, strlen(obj));
+    test_temp_path(obj_path, sizeof obj_path, "cube.obj");
+    test_temp_path(glb_path, sizeof glb_path, "cube.glb");
+    test_temp_path(back_path, sizeof back_path, "cube_back.obj");
+    test_write_file(obj_path, obj, strlen(obj));
 
     pz_ctx ctx = {0};
     pz_mesh *original = NULL, *via_glb = NULL, *back = NULL;
-    REQUIRE_OK(pz_mesh_read(obj_path, &original, &ctx), "%s", ctx.error);
-    REQUIRE_OK(pz_mesh_write(original, glb_path, NULL, &ctx), "%s", ctx.error);
-    REQUIRE_OK(pz_mesh_read(glb_path, &via_glb, &ctx), "%s", ctx.error);
+    REQUIRE_OK(pz_mesh_read(obj_path, &original, &ctx), ctx);
+    REQUIRE_OK(pz_mesh_write(original, glb_path, NULL, &ctx), ctx);
+    REQUIRE_OK(pz_mesh_read(glb_path, &via_glb, &ctx), ctx);
     check_same_geometry(original, via_glb, "cube.glb");
-    REQUIRE_OK(pz_mesh_write(via_glb, back_path, NULL, &ctx), "%s", ctx.error);
-    REQUIRE_OK(pz_mesh_read(back_path, &back, &ctx), "%s", ctx.error);
+    REQUIRE_OK(pz_mesh_write(via_glb, back_path, NULL, &ctx), ctx);
+    REQUIRE_OK(pz_mesh_read(back_path, &back, &ctx), ctx);
     check_same_geometry(original, back, "cube_back.obj");
     CHECK(back->label_count == original->label_count, "%d labels, expected %d", (int)back->label_count,
           (int)original->label_count);
@@ -801,26 +755,9 @@ static void write_validator_samples(const char *directory)
     }
 }
 
-static void remove_temp_dir(void)
-{
-    static const char *files[] = {"grid.glb", "no_poses.glb", "plain.glb", "ext.bin", "cube.obj",
-                                  "cube.glb", "cube_back.obj"};
-    char path[512];
-    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
-        path_in_temp(path, sizeof path, files[i]);
-        remove(path);
-    }
-    path_in_temp(path, sizeof path, "sub");
-    rmdir(path);
-    rmdir(temp_dir);
-}
-
 int main(void)
 {
-    const char *tmp = getenv("TMPDIR");
-    snprintf(temp_dir, sizeof temp_dir, "%s/pz_test_gltf_XXXXXX", tmp && *tmp ? tmp : "/tmp");
-    int made = mkdtemp(temp_dir) != NULL;
-    REQUIRE(made, "mkdtemp");
+    test_temp_dir_create("pz_test_gltf");
     test_grid_round_trip();
     test_plain_round_trip();
     test_hand_built_scene();
@@ -830,6 +767,6 @@ int main(void)
     const char *samples = getenv("PZ_GLB_OUT");
     if (samples && *samples)
         write_validator_samples(samples);
-    remove_temp_dir();
+    CHECK(test_temp_dir_remove() == 0, "cannot remove %s", test_temp_dir);
     return test_finish();
 }

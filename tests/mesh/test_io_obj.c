@@ -5,8 +5,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_meshes.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -14,32 +13,13 @@
 
 static pz_mesh *read_ok(const char *text)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    pz_mesh *mesh = NULL;
-    pz_status status = pz_obj_read_memory(text, strlen(text), "inline.obj", &mesh, &ctx);
-    CHECK(status == PZ_OK, "read failed: %s", ctx.error);
-    return mesh;
+    return test_read_ok(pz_obj_read_memory, text, strlen(text), "inline.obj", "inline.obj");
 }
 
 /* Reads text that must fail with PZ_ERR_DATA and a message containing `expected`. */
 static void read_fails(const char *text, const char *expected)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    pz_mesh *mesh = (pz_mesh *)&ctx; /* must be reset to NULL */
-    pz_status status = pz_obj_read_memory(text, strlen(text), "bad.obj", &mesh, &ctx);
-    CHECK(status == PZ_ERR_DATA, "expected PZ_ERR_DATA for %s, got %d", expected, (int)status);
-    CHECK(mesh == NULL, "*out not NULL after failure");
-    CHECK(strncmp(ctx.error, "bad.obj: ", 9) == 0, "message does not start with the name: %s", ctx.error);
-    CHECK(strstr(ctx.error, expected) != NULL, "message '%s' lacks '%s'", ctx.error, expected);
-    CHECK(strchr(ctx.error, '\n') == NULL, "message is not one line");
-}
-
-static int face_is(const pz_mesh *mesh, int32_t f, int32_t a, int32_t b, int32_t c)
-{
-    const int32_t *corners = mesh->faces + 3 * f;
-    return corners[0] == a && corners[1] == b && corners[2] == c;
+    test_read_fails(pz_obj_read_memory, text, strlen(text), "bad.obj", expected);
 }
 
 static const char square[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
@@ -59,7 +39,7 @@ static void test_corner_forms(void)
             continue;
         CHECK(mesh->vertex_count == 4 && mesh->face_count == 2, "form %d: %d/%d", form, mesh->vertex_count,
               mesh->face_count);
-        CHECK(face_is(mesh, 0, 0, 1, 2) && face_is(mesh, 1, 0, 2, 3), "form %d: faces wrong", form);
+        CHECK(test_face_is(mesh, 0, 0, 1, 2) && test_face_is(mesh, 1, 0, 2, 3), "form %d: faces wrong", form);
         CHECK((mesh->uvs != NULL) == has_uvs[form], "form %d: uvs presence", form);
         if (has_uvs[form] && mesh->uvs) {
             CHECK(mesh->uv_count == 4, "uv_count %d", mesh->uv_count);
@@ -77,13 +57,13 @@ static void test_negative_and_forward_indices(void)
 {
     pz_mesh *mesh = read_ok("v 0 0 0\nv 1 0 0\nv 1 1 0\nf -3 -2 -1\nv 0 1 0\nf -4 -2 -1\n");
     if (mesh) {
-        CHECK(mesh->face_count == 2 && face_is(mesh, 0, 0, 1, 2) && face_is(mesh, 1, 0, 2, 3),
+        CHECK(mesh->face_count == 2 && test_face_is(mesh, 0, 0, 1, 2) && test_face_is(mesh, 1, 0, 2, 3),
               "relative indices resolve against the vertices defined so far");
         pz_mesh_free(&mesh);
     }
     mesh = read_ok("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n");
     if (mesh) {
-        CHECK(mesh->vertex_count == 3 && face_is(mesh, 0, 0, 1, 2), "a forward reference is allowed");
+        CHECK(mesh->vertex_count == 3 && test_face_is(mesh, 0, 0, 1, 2), "a forward reference is allowed");
         pz_mesh_free(&mesh);
     }
 }
@@ -93,7 +73,7 @@ static void test_polygons(void)
     pz_mesh *mesh = read_ok("v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n");
     if (mesh) {
         CHECK(mesh->face_count == 3, "pentagon -> 3 triangles, got %d", mesh->face_count);
-        CHECK(face_is(mesh, 0, 0, 1, 2) && face_is(mesh, 1, 0, 2, 3) && face_is(mesh, 2, 0, 3, 4), "fan order");
+        CHECK(test_face_is(mesh, 0, 0, 1, 2) && test_face_is(mesh, 1, 0, 2, 3) && test_face_is(mesh, 2, 0, 3, 4), "fan order");
         pz_mesh_free(&mesh);
     }
     /* One face line of 20000 corners: lines of any length. */
@@ -109,7 +89,7 @@ static void test_polygons(void)
     mesh = read_ok(text);
     if (mesh) {
         CHECK(mesh->face_count == (int32_t)corner_count - 2, "long polygon: %d faces", mesh->face_count);
-        CHECK(face_is(mesh, mesh->face_count - 1, 0, (int32_t)corner_count - 2, (int32_t)corner_count - 1),
+        CHECK(test_face_is(mesh, mesh->face_count - 1, 0, (int32_t)corner_count - 2, (int32_t)corner_count - 1),
               "last fan triangle");
         pz_mesh_free(&mesh);
     }
@@ -169,7 +149,7 @@ static void test_whitespace_and_skipped_lines(void)
         CHECK(mesh->positions[0] == 1 && mesh->positions[2] == 3 && mesh->positions[3] == 4 &&
                   mesh->positions[8] == 9,
               "extra vertex values are ignored");
-        CHECK(face_is(mesh, 0, 0, 1, 2), "face");
+        CHECK(test_face_is(mesh, 0, 0, 1, 2), "face");
         pz_mesh_free(&mesh);
     }
 }

@@ -4,31 +4,18 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_meshes.h"
 
 #include <string.h>
 
 static pz_mesh *read_ok(const char *text)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    pz_mesh *mesh = NULL;
-    pz_status status = pz_off_read_memory(text, strlen(text), "inline.off", &mesh, &ctx);
-    CHECK(status == PZ_OK, "read failed: %s", ctx.error);
-    return mesh;
+    return test_read_ok(pz_off_read_memory, text, strlen(text), "inline.off", "inline.off");
 }
 
 static void read_fails(const char *text, const char *expected)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    pz_mesh *mesh = (pz_mesh *)&ctx;
-    pz_status status = pz_off_read_memory(text, strlen(text), "bad.off", &mesh, &ctx);
-    CHECK(status == PZ_ERR_DATA, "expected PZ_ERR_DATA (%s), got %d", expected, (int)status);
-    CHECK(mesh == NULL, "*out not NULL after failure");
-    CHECK(strncmp(ctx.error, "bad.off: ", 9) == 0, "message lacks the name: %s", ctx.error);
-    CHECK(strstr(ctx.error, expected) != NULL, "message '%s' lacks '%s'", ctx.error, expected);
+    test_read_fails(pz_off_read_memory, text, strlen(text), "bad.off", expected);
 }
 
 /* Every variant describes the same square (a quad) plus one triangle. */

@@ -6,8 +6,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_meshes.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -53,32 +52,20 @@ static void put_f64(bytes *b, double value)
     put_bits(b, bits, 8);
 }
 
+/* pz_ply_read_memory as a test_reader. */
+static pz_status read_ply(const char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx)
+{
+    return pz_ply_read_memory((const unsigned char *)data, size, name, out, ctx);
+}
+
 static pz_mesh *read_ok(const bytes *b, const char *what)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    pz_mesh *mesh = NULL;
-    pz_status status = pz_ply_read_memory(b->data, b->size, "test.ply", &mesh, &ctx);
-    CHECK(status == PZ_OK, "%s: read failed: %s", what, ctx.error);
-    return mesh;
+    return test_read_ok(read_ply, (const char *)b->data, b->size, "test.ply", what);
 }
 
 static void read_fails(const bytes *b, const char *expected)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    pz_mesh *mesh = (pz_mesh *)&ctx;
-    pz_status status = pz_ply_read_memory(b->data, b->size, "bad.ply", &mesh, &ctx);
-    CHECK(status == PZ_ERR_DATA, "expected PZ_ERR_DATA (%s), got %d", expected, (int)status);
-    CHECK(mesh == NULL, "*out not NULL after failure");
-    CHECK(strncmp(ctx.error, "bad.ply: ", 9) == 0, "message lacks the name: %s", ctx.error);
-    CHECK(strstr(ctx.error, expected) != NULL, "message '%s' lacks '%s'", ctx.error, expected);
-}
-
-static int face_is(const pz_mesh *mesh, int32_t f, int32_t a, int32_t b, int32_t c)
-{
-    const int32_t *corners = mesh->faces + 3 * f;
-    return corners[0] == a && corners[1] == b && corners[2] == c;
+    test_read_fails(read_ply, (const char *)b->data, b->size, "bad.ply", expected);
 }
 
 /* A unit square as a quad plus a triangle on vertex 4, with properties to skip. */
@@ -101,7 +88,7 @@ static void test_ascii(void)
     if (!mesh)
         return;
     CHECK(mesh->vertex_count == 5 && mesh->face_count == 3, "counts %d/%d", mesh->vertex_count, mesh->face_count);
-    CHECK(face_is(mesh, 0, 0, 1, 2) && face_is(mesh, 1, 0, 2, 3) && face_is(mesh, 2, 1, 4, 2), "faces");
+    CHECK(test_face_is(mesh, 0, 0, 1, 2) && test_face_is(mesh, 1, 0, 2, 3) && test_face_is(mesh, 2, 1, 4, 2), "faces");
     CHECK(mesh->positions[11] == 0.5 && mesh->positions[12] == 2 && mesh->positions[14] == -150.0, "positions");
     CHECK(mesh->uvs == NULL && mesh->face_labels == NULL, "no UVs or labels");
     pz_mesh_free(&mesh);
@@ -151,7 +138,7 @@ static void test_binary(void)
             if (!mesh)
                 continue;
             CHECK(mesh->vertex_count == 4 && mesh->face_count == 2, "be %d ff %d: counts", big_endian, faces_first);
-            CHECK(face_is(mesh, 0, 0, 1, 2) && face_is(mesh, 1, 0, 2, 3), "be %d ff %d: faces", big_endian,
+            CHECK(test_face_is(mesh, 0, 0, 1, 2) && test_face_is(mesh, 1, 0, 2, 3), "be %d ff %d: faces", big_endian,
                   faces_first);
             CHECK(mesh->positions[0] == 0.1 && mesh->positions[3] == 1.0 / 3.0 && mesh->positions[6] == 1e-300,
                   "be %d: doubles exact", big_endian);
@@ -185,7 +172,7 @@ static void test_labels_and_types(void)
         return;
     CHECK(mesh->positions[3] == -1 && mesh->positions[4] == 250 && mesh->positions[5] == 4e9, "int8 uint8 uint32");
     CHECK(mesh->uvs && mesh->uvs[2] == 1 && mesh->uvs[3] == -1, "texture_u / texture_v");
-    CHECK(face_is(mesh, 2, 0, 3, 0), "float32 indices");
+    CHECK(test_face_is(mesh, 2, 0, 3, 0), "float32 indices");
     REQUIRE(mesh->face_labels != NULL, "labels read");
     CHECK(mesh->label_count == 2, "distinct labels renumbered densely: %d", mesh->label_count);
     CHECK(mesh->face_labels[0] == 1 && mesh->face_labels[1] == 0 && mesh->face_labels[2] == 1, "label order kept");

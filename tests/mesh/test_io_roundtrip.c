@@ -9,7 +9,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_files.h"
 
 #include <dirent.h>
 #include <math.h>
@@ -18,20 +18,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-static char scratch[256];
-
+/* A file in the scratch directory (the name lasts until the next call). */
 static const char *scratch_path(const char *file)
 {
     static char path[512];
-    snprintf(path, sizeof path, "%s/%s", scratch, file);
-    return path;
-}
-
-static char *duplicate(const char *text)
-{
-    char *copy = malloc(strlen(text) + 1);
-    REQUIRE(copy != NULL, "malloc");
-    return strcpy(copy, text);
+    return test_temp_path(path, sizeof path, file);
 }
 
 /*
@@ -44,9 +35,8 @@ static pz_mesh *make_grid(int with_seams)
     pz_ctx ctx;
     pz_ctx_init(&ctx);
     enum { columns = 5, rows = 4 };
-    pz_mesh *mesh;
-    pz_status created = pz_mesh_create(columns * rows, 2 * (columns - 1) * (rows - 1), &mesh, &ctx);
-    REQUIRE(created == PZ_OK, "create"); /* REQUIRE evaluates its condition twice */
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_create(columns * rows, 2 * (columns - 1) * (rows - 1), &mesh, &ctx), ctx);
     for (int r = 0; r < rows; ++r)
         for (int c = 0; c < columns; ++c) {
             double *p = mesh->positions + 3 * (r * columns + c);
@@ -86,8 +76,8 @@ static pz_mesh *make_grid(int with_seams)
     REQUIRE(mesh->face_labels && mesh->label_names, "malloc");
     for (int32_t face = 0; face < mesh->face_count; ++face)
         mesh->face_labels[face] = face < 6 ? 0 : face < 14 ? 2 : face < 18 ? 1 : 0;
-    mesh->label_names[0] = duplicate("front");
-    mesh->label_names[2] = duplicate("sleeve left");
+    mesh->label_names[0] = test_strdup("front");
+    mesh->label_names[2] = test_strdup("sleeve left");
     return mesh;
 }
 
@@ -199,7 +189,7 @@ static void test_ply_roundtrip(void)
 
 static int count_files_in_scratch(void)
 {
-    DIR *dir = opendir(scratch);
+    DIR *dir = opendir(test_temp_dir);
     int count = 0;
     for (struct dirent *entry; dir && (entry = readdir(dir));)
         count += entry->d_name[0] != '.';
@@ -232,15 +222,13 @@ static void test_dispatch_errors(void)
     expect_error(pz_mesh_read(missing, &mesh, &ctx), PZ_ERR_OPEN, &ctx, "missing.obj: cannot open: ");
     CHECK(mesh == NULL, "*out NULL");
     char directory[512];
-    snprintf(directory, sizeof directory, "%s/folder.obj", scratch);
+    test_temp_path(directory, sizeof directory, "folder.obj");
     int made = mkdir(directory, 0700);
     REQUIRE(made == 0, "mkdir");
     expect_error(pz_mesh_read(directory, &mesh, &ctx), PZ_ERR_OPEN, &ctx, "folder.obj: cannot open: Is a directory");
     expect_error(pz_mesh_read(scratch_path("mesh.stl"), &mesh, &ctx), PZ_ERR_DATA, &ctx,
                  "mesh.stl: unknown format (expected .obj, .ply, .off, .glb, .gltf)");
-    FILE *empty = fopen(scratch_path("empty.ply"), "wb");
-    REQUIRE(empty != NULL, "fopen");
-    fclose(empty);
+    test_write_file(scratch_path("empty.ply"), "", 0);
     expect_error(pz_mesh_read(scratch_path("empty.ply"), &mesh, &ctx), PZ_ERR_DATA, &ctx, "empty.ply: ");
 
     int files_before = count_files_in_scratch();
@@ -255,10 +243,7 @@ static void test_dispatch_errors(void)
 
 static void write_text(const char *path, const char *text)
 {
-    FILE *file = fopen(path, "wb");
-    REQUIRE(file != NULL, "fopen %s", path);
-    fputs(text, file);
-    fclose(file);
+    test_write_file(path, text, strlen(text));
 }
 
 static void test_poses(void)
@@ -271,11 +256,11 @@ static void test_poses(void)
     pz_ctx ctx;
     pz_ctx_init(&ctx);
     char rest[512], pose1[512], pose2[512], fewer[512], other[512];
-    snprintf(rest, sizeof rest, "%s", scratch_path("rest.obj"));
-    snprintf(pose1, sizeof pose1, "%s", scratch_path("pose1.obj"));
-    snprintf(pose2, sizeof pose2, "%s", scratch_path("pose2.off"));
-    snprintf(fewer, sizeof fewer, "%s", scratch_path("fewer.obj"));
-    snprintf(other, sizeof other, "%s", scratch_path("other.obj"));
+    test_temp_path(rest, sizeof rest, "rest.obj");
+    test_temp_path(pose1, sizeof pose1, "pose1.obj");
+    test_temp_path(pose2, sizeof pose2, "pose2.off");
+    test_temp_path(fewer, sizeof fewer, "fewer.obj");
+    test_temp_path(other, sizeof other, "other.obj");
     const char *poses[2] = {pose1, pose2};
     pz_mesh *mesh = NULL;
     CHECK(pz_mesh_read_with_poses(rest, poses, 2, &mesh, &ctx) == PZ_OK, "poses: %s", ctx.error);
@@ -298,16 +283,11 @@ static void test_poses(void)
 
 int main(void)
 {
-    const char *tmp = getenv("TMPDIR");
-    snprintf(scratch, sizeof scratch, "%s/pz_io_roundtrip_XXXXXX", tmp && *tmp ? tmp : "/tmp");
-    char *made = mkdtemp(scratch);
-    REQUIRE(made != NULL, "mkdtemp");
+    test_temp_dir_create("pz_io_roundtrip");
     test_obj_roundtrip();
     test_ply_roundtrip();
     test_dispatch_errors();
     test_poses();
-    char command[600];
-    snprintf(command, sizeof command, "rm -rf '%s'", scratch);
-    CHECK(system(command) == 0, "cleanup");
+    CHECK(test_temp_dir_remove() == 0, "cleanup: cannot remove %s", test_temp_dir);
     return test_finish();
 }

@@ -6,95 +6,11 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_meshes.h"
 
-#include <math.h>
 #include <string.h>
 
 static pz_ctx ctx;
-
-/* REQUIRE evaluates its condition twice: calls with side effects go through this. */
-#define REQUIRE_OK(call)                                                  \
-    do {                                                                  \
-        pz_status call_status = (call);                                   \
-        REQUIRE(call_status == PZ_OK, "%s: %s", #call, ctx.error);        \
-    } while (0)
-
-static pz_mesh *mesh_from(int32_t vertex_count, const double *positions, int32_t face_count, const int32_t *faces)
-{
-    pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_mesh_create(vertex_count, face_count, &mesh, &ctx));
-    memcpy(mesh->positions, positions, (size_t)vertex_count * 3 * sizeof(double));
-    memcpy(mesh->faces, faces, (size_t)face_count * 3 * sizeof(int32_t));
-    return mesh;
-}
-
-/* A grid of columns x rows unit squares in the z = 0 plane, each split along
- * its rising diagonal, counter-clockwise seen from +z. Vertex (i, j) is
- * j * (columns + 1) + i. wrap_columns joins the last column to the first
- * (a tube) and is then rolled round the z axis instead. */
-static pz_mesh *grid(int columns, int rows, int wrap_columns, int wrap_rows)
-{
-    int vertex_columns = wrap_columns ? columns : columns + 1;
-    int vertex_rows = wrap_rows ? rows : rows + 1;
-    pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_mesh_create(vertex_columns * vertex_rows, 2 * columns * rows, &mesh, &ctx));
-    const double pi = 3.14159265358979323846;
-    for (int j = 0; j < vertex_rows; ++j)
-        for (int i = 0; i < vertex_columns; ++i) {
-            double *p = mesh->positions + 3 * (j * vertex_columns + i);
-            double u = 2 * pi * i / columns, v = 2 * pi * j / rows;
-            if (wrap_columns && wrap_rows) {  /* torus */
-                p[0] = (3 + cos(v)) * cos(u);
-                p[1] = (3 + cos(v)) * sin(u);
-                p[2] = sin(v);
-            } else if (wrap_columns) {  /* tube round z, outward normals */
-                p[0] = cos(u);
-                p[1] = sin(u);
-                p[2] = j;
-            } else {
-                p[0] = i;
-                p[1] = j;
-                p[2] = 0;
-            }
-        }
-    int32_t *face = mesh->faces;
-    for (int j = 0; j < rows; ++j)
-        for (int i = 0; i < columns; ++i) {
-            int32_t a = j * vertex_columns + i;
-            int32_t b = j * vertex_columns + (i + 1) % vertex_columns;
-            int32_t c = ((j + 1) % vertex_rows) * vertex_columns + i;
-            int32_t d = ((j + 1) % vertex_rows) * vertex_columns + (i + 1) % vertex_columns;
-            int32_t quad[6] = {a, b, d, a, d, c};
-            memcpy(face, quad, sizeof quad);
-            face += 6;
-        }
-    return mesh;
-}
-
-static pz_mesh *tetrahedron(void)
-{
-    static const double positions[] = {1, 1, 1, 1, -1, -1, -1, 1, -1, -1, -1, 1};
-    static const int32_t faces[] = {0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2};
-    return mesh_from(4, positions, 4, faces);
-}
-
-static pz_topology *build(const pz_mesh *mesh)
-{
-    pz_topology *topology = NULL;
-    REQUIRE_OK(pz_topology_build(mesh, &topology, &ctx));
-    return topology;
-}
-
-static pz_topology_summary summarize(const pz_mesh *mesh)
-{
-    pz_topology *topology = build(mesh);
-    pz_topology_summary summary;
-    CHECK(pz_topology_summarize(topology, &summary, &ctx) == PZ_OK, "%s", ctx.error);
-    pz_topology_free(&topology);
-    return summary;
-}
 
 /* Every half-edge's twin runs the other way and points back; edges cover half-edges once. */
 static void check_invariants(const pz_topology *t, const char *name)
@@ -125,17 +41,17 @@ static void test_counts(void)
         pz_mesh *mesh;
         int32_t v, e, f, components, loops, chi, genus;
     } cases[] = {
-        {"triangle", mesh_from(3, tri_positions, 1, tri_faces), 3, 3, 1, 1, 1, 1, 0},
-        {"quad strip", grid(3, 1, 0, 0), 8, 13, 6, 1, 1, 1, 0},
-        {"tetrahedron", tetrahedron(), 4, 6, 4, 1, 0, 2, 0},
-        {"torus", grid(6, 4, 1, 1), 24, 72, 48, 1, 0, 0, 1},
-        {"tube", grid(8, 2, 1, 0), 24, 56, 32, 1, 2, 0, 0},
+        {"triangle", test_mesh_from(3, tri_positions, 1, tri_faces, &ctx), 3, 3, 1, 1, 1, 1, 0},
+        {"quad strip", test_grid(3, 1, TEST_GRID_FLAT, 0, &ctx), 8, 13, 6, 1, 1, 1, 0},
+        {"tetrahedron", test_tetrahedron(&ctx), 4, 6, 4, 1, 0, 2, 0},
+        {"torus", test_grid(6, 4, TEST_GRID_TORUS, 0, &ctx), 24, 72, 48, 1, 0, 0, 1},
+        {"tube", test_grid(8, 2, TEST_GRID_TUBE, 0, &ctx), 24, 56, 32, 1, 2, 0, 0},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; ++i) {
-        pz_topology *topology = build(cases[i].mesh);
+        pz_topology *topology = test_topology(cases[i].mesh, &ctx);
         check_invariants(topology, cases[i].name);
         pz_topology_free(&topology);
-        pz_topology_summary s = summarize(cases[i].mesh);
+        pz_topology_summary s = test_summary(cases[i].mesh, &ctx);
         CHECK(s.vertex_count == cases[i].v, "%s: V %d", cases[i].name, (int)s.vertex_count);
         CHECK(s.edge_count == cases[i].e, "%s: E %d", cases[i].name, (int)s.edge_count);
         CHECK(s.face_count == cases[i].f, "%s: F %d", cases[i].name, (int)s.face_count);
@@ -155,8 +71,8 @@ static void test_components(void)
                                        20, 0, 0, 21, 0, 0, 20, 1, 0, 50, 50, 50};
     static const int32_t faces[] = {0, 1, 2, 8, 9, 10, 0, 3, 1, 4, 5, 6, 0, 2, 3,
                                     4, 7, 5, 1, 3, 2, 4, 6, 7, 5, 7, 6};
-    pz_mesh *mesh = mesh_from(12, positions, 9, faces);
-    pz_topology *topology = build(mesh);
+    pz_mesh *mesh = test_mesh_from(12, positions, 9, faces, &ctx);
+    pz_topology *topology = test_topology(mesh, &ctx);
     int32_t component[9];
     int32_t count = pz_topology_components(topology, component, &ctx);
     CHECK(count == 3, "components %d", (int)count);
@@ -170,6 +86,15 @@ static void test_components(void)
     CHECK(topology->vertex_halfedge[11] == -1, "isolated vertex has no half-edge");
     CHECK(pz_topology_vertex_ring(topology, 11, NULL, 0) == 0, "isolated vertex has an empty ring");
     pz_topology_free(&topology);
+    int32_t raw_component[9];
+    CHECK(pz_mesh_face_components(mesh, raw_component, &ctx) == 3, "components without connectivity");
+    CHECK(memcmp(raw_component, expected, sizeof expected) == 0, "same numbering without connectivity");
+    /* An out-of-range corner (an invalid mesh) is skipped, not followed. */
+    mesh->faces[3 * 1 + 0] = 1000;
+    CHECK(pz_mesh_face_components(mesh, raw_component, &ctx) == 3, "an out-of-range corner is skipped");
+    mesh->faces[3 * 1 + 0] = mesh->faces[3 * 1 + 1] = mesh->faces[3 * 1 + 2] = -5;
+    CHECK(pz_mesh_face_components(mesh, raw_component, &ctx) == 2 && raw_component[1] == -1,
+          "a face with no corner in range gets component -1 and the lone triangle's component is gone");
     pz_mesh_free(&mesh);
 }
 
@@ -186,10 +111,10 @@ static void test_boundary_loops(void)
 {
     /* Quad strip 2 x 1: bottom 0 1 2, top 3 4 5; counter-clockwise seen from +z,
      * starting at the first boundary half-edge 0 -> 1. */
-    pz_mesh *strip = grid(2, 1, 0, 0);
-    pz_topology *topology = build(strip);
+    pz_mesh *strip = test_grid(2, 1, TEST_GRID_FLAT, 0, &ctx);
+    pz_topology *topology = test_topology(strip, &ctx);
     pz_loops *loops = NULL;
-    REQUIRE_OK(pz_topology_boundary_loops(topology, &loops, &ctx));
+    REQUIRE_OK(pz_topology_boundary_loops(topology, &loops, &ctx), ctx);
     CHECK(loops->loop_count == 1, "strip: %d loops", (int)loops->loop_count);
     static const int32_t strip_loop[] = {0, 1, 2, 5, 4, 3};
     check_loop(loops, 0, strip_loop, 6, "strip");
@@ -201,9 +126,9 @@ static void test_boundary_loops(void)
 
     /* Tube of 4 columns, 1 row: the bottom runs with increasing angle, the top
      * the other way (surface on the left of each). */
-    pz_mesh *tube = grid(4, 1, 1, 0);
-    topology = build(tube);
-    REQUIRE_OK(pz_topology_boundary_loops(topology, &loops, &ctx));
+    pz_mesh *tube = test_grid(4, 1, TEST_GRID_TUBE, 0, &ctx);
+    topology = test_topology(tube, &ctx);
+    REQUIRE_OK(pz_topology_boundary_loops(topology, &loops, &ctx), ctx);
     CHECK(loops->loop_count == 2, "tube: %d loops", (int)loops->loop_count);
     static const int32_t bottom[] = {0, 1, 2, 3}, top[] = {5, 4, 7, 6};
     check_loop(loops, 0, bottom, 4, "tube bottom");
@@ -214,9 +139,9 @@ static void test_boundary_loops(void)
     pz_topology_free(&topology);
     pz_mesh_free(&tube);
 
-    pz_mesh *closed = tetrahedron();
-    topology = build(closed);
-    REQUIRE_OK(pz_topology_boundary_loops(topology, &loops, &ctx));
+    pz_mesh *closed = test_tetrahedron(&ctx);
+    topology = test_topology(closed, &ctx);
+    REQUIRE_OK(pz_topology_boundary_loops(topology, &loops, &ctx), ctx);
     CHECK(loops->loop_count == 0 && loops->loop_offsets[0] == 0, "a closed mesh has no boundary loop");
     pz_loops_free(&loops);
     pz_topology_free(&topology);
@@ -240,8 +165,8 @@ static void test_vertex_ring(void)
 {
     /* 2 x 2 grid, vertex (i, j) = 3j + i; diagonals rise, so the centre 4 has
      * the six neighbours 5 8 7 3 0 1 counter-clockwise. */
-    pz_mesh *mesh = grid(2, 2, 0, 0);
-    pz_topology *topology = build(mesh);
+    pz_mesh *mesh = test_grid(2, 2, TEST_GRID_FLAT, 0, &ctx);
+    pz_topology *topology = test_topology(mesh, &ctx);
     int32_t ring[16];
     int32_t count = pz_topology_vertex_ring(topology, 4, ring, 16);
     static const int32_t centre[] = {5, 8, 7, 3, 0, 1};
@@ -284,33 +209,16 @@ static void test_refusals(void)
 {
     static const double five[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0};
     static const int32_t bowtie[] = {0, 1, 2, 0, 3, 4};
-    expect_refused(mesh_from(5, five, 2, bowtie), "bow-tie", "vertex 0");
+    expect_refused(test_mesh_from(5, five, 2, bowtie, &ctx), "bow-tie", "vertex 0");
     static const int32_t three_on_edge[] = {0, 1, 2, 1, 0, 3, 0, 1, 4};
-    expect_refused(mesh_from(5, five, 3, three_on_edge), "three faces on an edge", "edge 0-1");
+    expect_refused(test_mesh_from(5, five, 3, three_on_edge, &ctx), "three faces on an edge", "edge 0-1");
     static const int32_t flipped[] = {0, 1, 2, 0, 1, 3};
-    expect_refused(mesh_from(5, five, 2, flipped), "flipped face", "edge 0-1");
+    expect_refused(test_mesh_from(5, five, 2, flipped, &ctx), "flipped face", "edge 0-1");
     static const int32_t out_of_range[] = {0, 1, 7};
-    expect_refused(mesh_from(5, five, 1, out_of_range), "index out of range", "face 0");
+    expect_refused(test_mesh_from(5, five, 1, out_of_range, &ctx), "index out of range", "face 0");
     static const int32_t repeated[] = {0, 1, 1};
-    expect_refused(mesh_from(5, five, 1, repeated), "repeated index", "face 0");
-    /* Moebius band: 6 quads, the last joining with a half twist. */
-    double moebius_positions[12 * 3];
-    int32_t moebius_faces[12 * 3];
-    for (int i = 0; i < 6; ++i) {
-        double t = 2 * 3.14159265358979323846 * i / 6;
-        for (int side = 0; side < 2; ++side) {
-            double w = side ? 0.3 : -0.3;
-            double *p = moebius_positions + 3 * (2 * i + side);
-            p[0] = (2 + w * cos(t / 2)) * cos(t);
-            p[1] = (2 + w * cos(t / 2)) * sin(t);
-            p[2] = w * sin(t / 2);
-        }
-        int32_t a0 = 2 * i, a1 = 2 * i + 1;
-        int32_t b0 = i < 5 ? 2 * (i + 1) : 1, b1 = i < 5 ? 2 * (i + 1) + 1 : 0;
-        int32_t quad[6] = {a0, b0, b1, a0, b1, a1};
-        memcpy(moebius_faces + 6 * i, quad, sizeof quad);
-    }
-    expect_refused(mesh_from(12, moebius_positions, 12, moebius_faces), "Moebius band", "same way");
+    expect_refused(test_mesh_from(5, five, 1, repeated, &ctx), "repeated index", "face 0");
+    expect_refused(test_moebius(&ctx), "Moebius band", "same way");
 }
 
 /* Real garments (INVENTORY.md gives their boundary loop counts): valid, one
@@ -373,8 +281,8 @@ int main(void)
     test_refusals();
     test_real_meshes();
     pz_mesh *empty = NULL;
-    REQUIRE_OK(pz_mesh_create(0, 0, &empty, &ctx));
-    pz_topology_summary s = summarize(empty);
+    REQUIRE_OK(pz_mesh_create(0, 0, &empty, &ctx), ctx);
+    pz_topology_summary s = test_summary(empty, &ctx);
     CHECK(s.vertex_count == 0 && s.edge_count == 0 && s.component_count == 0 && s.genus == 0, "empty mesh");
     pz_mesh_free(&empty);
     return test_finish();

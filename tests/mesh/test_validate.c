@@ -6,50 +6,12 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/mesh.h"
-#include "test_util.h"
+#include "test_meshes.h"
 
 #include <math.h>
 #include <string.h>
 
 static pz_ctx ctx;
-
-/* REQUIRE evaluates its condition twice: calls with side effects go through this. */
-#define REQUIRE_OK(call)                                                  \
-    do {                                                                  \
-        pz_status call_status = (call);                                   \
-        REQUIRE(call_status == PZ_OK, "%s: %s", #call, ctx.error);        \
-    } while (0)
-
-static pz_mesh *mesh_from(int32_t vertex_count, const double *positions, int32_t face_count, const int32_t *faces)
-{
-    pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_mesh_create(vertex_count, face_count, &mesh, &ctx));
-    memcpy(mesh->positions, positions, (size_t)vertex_count * 3 * sizeof(double));
-    memcpy(mesh->faces, faces, (size_t)face_count * 3 * sizeof(int32_t));
-    return mesh;
-}
-
-/* columns x rows unit squares at z = 0 split on the rising diagonal; vertex (i, j) = j (columns + 1) + i. */
-static pz_mesh *grid(int columns, int rows, int extra_faces)
-{
-    pz_mesh *mesh = NULL;
-    REQUIRE_OK(pz_mesh_create((columns + 1) * (rows + 1), 2 * columns * rows + extra_faces, &mesh, &ctx));
-    for (int j = 0; j <= rows; ++j)
-        for (int i = 0; i <= columns; ++i) {
-            mesh->positions[3 * (j * (columns + 1) + i)] = i;
-            mesh->positions[3 * (j * (columns + 1) + i) + 1] = j;
-        }
-    int32_t *face = mesh->faces;
-    for (int j = 0; j < rows; ++j)
-        for (int i = 0; i < columns; ++i) {
-            int32_t a = j * (columns + 1) + i, b = a + 1, c = a + columns + 1, d = c + 1;
-            int32_t quad[6] = {a, b, d, a, d, c};
-            memcpy(face, quad, sizeof quad);
-            face += 6;
-        }
-    return mesh;
-}
 
 /* Validation counts, in the struct's order, and the expected first line. */
 typedef struct expected {
@@ -61,7 +23,7 @@ typedef struct expected {
 static void check_validation(const pz_mesh *mesh, const char *name, expected want)
 {
     pz_validation v;
-    REQUIRE_OK(pz_mesh_validate(mesh, &v, &ctx));
+    REQUIRE_OK(pz_mesh_validate(mesh, &v, &ctx), ctx);
     CHECK(v.nonfinite_coordinates == want.nonfinite, "%s: non-finite %d", name, (int)v.nonfinite_coordinates);
     CHECK(v.bad_indices == want.bad, "%s: bad indices %d", name, (int)v.bad_indices);
     CHECK(v.degenerate_faces == want.degenerate, "%s: degenerate %d", name, (int)v.degenerate_faces);
@@ -90,26 +52,26 @@ static const double five[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0};
 
 static void test_each_problem(void)
 {
-    pz_mesh *mesh = grid(3, 2, 0);
+    pz_mesh *mesh = test_grid(3, 2, TEST_GRID_FLAT, 0, &ctx);
     check_validation(mesh, "clean grid", (expected){0, 0, 0, 0, 0, 0, 0, 0, NULL});
     pz_mesh_free(&mesh);
 
     static const int32_t bowtie[] = {0, 1, 2, 0, 3, 4};
-    mesh = mesh_from(5, five, 2, bowtie);
+    mesh = test_mesh_from(5, five, 2, bowtie, &ctx);
     check_validation(mesh, "bow-tie", (expected){0, 0, 0, 0, 0, 1, 0, 0, "1 non-manifold vertex,"});
     pz_mesh_free(&mesh);
 
     /* Three fins on the edge 0-1 (off the plane, so none is degenerate). */
     static const double fins[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, -1, 1};
     static const int32_t three_on_edge[] = {0, 1, 2, 1, 0, 3, 0, 1, 4};
-    mesh = mesh_from(5, fins, 3, three_on_edge);
+    mesh = test_mesh_from(5, fins, 3, three_on_edge, &ctx);
     check_validation(mesh, "three faces on one edge",
                      (expected){0, 0, 0, 0, 1, 0, 0, 0, "1 non-manifold edge, with more than two faces (first: vertices 0-1)"});
     pz_mesh_free(&mesh);
 
     /* Flip face 1 of a 3 x 2 grid (the upper triangle of the corner cell):
      * its two interior edges now run the same way as their neighbours'. */
-    mesh = grid(3, 2, 0);
+    mesh = test_grid(3, 2, TEST_GRID_FLAT, 0, &ctx);
     int32_t swap = mesh->faces[3 * 1 + 1];
     mesh->faces[3 * 1 + 1] = mesh->faces[3 * 1 + 2];
     mesh->faces[3 * 1 + 2] = swap;
@@ -117,7 +79,7 @@ static void test_each_problem(void)
     pz_mesh_free(&mesh);
 
     /* A copy of face 3, rotated, and a reversed copy of face 7. */
-    mesh = grid(3, 2, 2);
+    mesh = test_grid(3, 2, TEST_GRID_FLAT, 2, &ctx);
     int32_t copies[6] = {mesh->faces[10], mesh->faces[11], mesh->faces[9], mesh->faces[21], mesh->faces[23],
                          mesh->faces[22]};
     memcpy(mesh->faces + 3 * 12, copies, sizeof copies);
@@ -127,7 +89,7 @@ static void test_each_problem(void)
     /* Face (1 0 3) with 3 on the line through 0 and 1: zero area. */
     static const double collinear[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 0, 0};
     static const int32_t sliver[] = {0, 1, 2, 1, 0, 3};
-    mesh = mesh_from(4, collinear, 2, sliver);
+    mesh = test_mesh_from(4, collinear, 2, sliver, &ctx);
     check_validation(mesh, "zero-area face", (expected){0, 0, 1, 0, 0, 0, 0, 0, "1 degenerate (zero-area) face (first: face 1)"});
     /* The threshold is relative: the same shape in metres or microns is just as degenerate or not. */
     for (int32_t i = 0; i < 12; ++i)
@@ -138,56 +100,34 @@ static void test_each_problem(void)
     pz_mesh_free(&mesh);
 
     static const int32_t triangle[] = {0, 1, 2};
-    mesh = mesh_from(3, five, 1, triangle);
+    mesh = test_mesh_from(3, five, 1, triangle, &ctx);
     mesh->positions[4] = NAN;
     check_validation(mesh, "NaN coordinate", (expected){1, 0, 0, 0, 0, 0, 0, 0, "(first: vertex 1)"});
     mesh->positions[4] = 0;
     double pose[9] = {0, 0, 0, 1, 0, 0, 0, 1, INFINITY};
-    REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx));
+    REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx), ctx);
     check_validation(mesh, "infinite pose coordinate", (expected){1, 0, 0, 0, 0, 0, 0, 0, "(first: vertex 2)"});
     pz_mesh_free(&mesh);
 
-    mesh = mesh_from(5, five, 1, triangle);
+    mesh = test_mesh_from(5, five, 1, triangle, &ctx);
     check_validation(mesh, "unreferenced vertices", (expected){0, 0, 0, 0, 0, 0, 0, 2, "2 unreferenced vertices (first: vertex 3)"});
     pz_mesh_free(&mesh);
 
     static const int32_t out_of_range[] = {0, 1, 2, 0, 2, 9};
-    mesh = mesh_from(3, five, 2, out_of_range);
+    mesh = test_mesh_from(3, five, 2, out_of_range, &ctx);
     check_validation(mesh, "index out of range", (expected){0, 1, 0, 0, 0, 0, 0, 0, "(first: face 1)"});
     pz_mesh_free(&mesh);
 
     /* A repeated index is a bad index and a zero-area face at once. */
     static const int32_t repeated[] = {0, 1, 2, 2, 1, 1};
-    mesh = mesh_from(3, five, 2, repeated);
+    mesh = test_mesh_from(3, five, 2, repeated, &ctx);
     check_validation(mesh, "repeated index", (expected){0, 1, 1, 0, 0, 0, 0, 0, "1 bad face index"});
     pz_mesh_free(&mesh);
 }
 
-/* Moebius band: 6 quads, the last joining with a half twist. */
-static pz_mesh *moebius(void)
+static void test_moebius_band(void)
 {
-    double positions[12 * 3];
-    int32_t faces[12 * 3];
-    for (int i = 0; i < 6; ++i) {
-        double t = 2 * 3.14159265358979323846 * i / 6;
-        for (int side = 0; side < 2; ++side) {
-            double w = side ? 0.3 : -0.3;
-            double *p = positions + 3 * (2 * i + side);
-            p[0] = (2 + w * cos(t / 2)) * cos(t);
-            p[1] = (2 + w * cos(t / 2)) * sin(t);
-            p[2] = w * sin(t / 2);
-        }
-        int32_t a0 = 2 * i, a1 = 2 * i + 1;
-        int32_t b0 = i < 5 ? 2 * (i + 1) : 1, b1 = i < 5 ? 2 * (i + 1) + 1 : 0;
-        int32_t quad[6] = {a0, b0, b1, a0, b1, a1};
-        memcpy(faces + 6 * i, quad, sizeof quad);
-    }
-    return mesh_from(12, positions, 12, faces);
-}
-
-static void test_moebius(void)
-{
-    pz_mesh *mesh = moebius();
+    pz_mesh *mesh = test_moebius(&ctx);
     check_validation(mesh, "Moebius band", (expected){0, 0, 0, 0, 0, 0, 1, 0, "1 inconsistently oriented edge"});
     CHECK(pz_mesh_prepare(mesh, "band.obj", PZ_REPAIR_ORIENT, &ctx) == PZ_ERR_INVALID_MESH,
           "a non-orientable band cannot be oriented");
@@ -199,7 +139,7 @@ static void test_moebius(void)
 static int grid_is_valid(const pz_mesh *mesh)
 {
     pz_validation v;
-    REQUIRE_OK(pz_mesh_validate(mesh, &v, &ctx));
+    REQUIRE_OK(pz_mesh_validate(mesh, &v, &ctx), ctx);
     int ok = pz_validation_ok(&v) && v.unreferenced_vertices == 0;
     pz_validation_clear(&v);
     return ok;
@@ -208,7 +148,7 @@ static int grid_is_valid(const pz_mesh *mesh)
 static void test_repairs(void)
 {
     /* Orientation: a minority of flipped faces are flipped back. */
-    pz_mesh *mesh = grid(3, 2, 0);
+    pz_mesh *mesh = test_grid(3, 2, TEST_GRID_FLAT, 0, &ctx);
     int32_t original[36];
     memcpy(original, mesh->faces, sizeof original);
     for (int f = 2; f <= 5; f += 3) {
@@ -223,7 +163,7 @@ static void test_repairs(void)
     pz_mesh_free(&mesh);
 
     /* A whole component upside down is flipped too (its majority is its own). */
-    mesh = grid(2, 1, 0);
+    mesh = test_grid(2, 1, TEST_GRID_FLAT, 0, &ctx);
     for (int f = 0; f < 4; ++f)
         if (f != 1) {
             int32_t swap = mesh->faces[3 * f + 1];
@@ -236,7 +176,7 @@ static void test_repairs(void)
     pz_mesh_free(&mesh);
 
     /* Duplicates dropped, labels and corner UVs following their faces. */
-    mesh = grid(3, 2, 2);
+    mesh = test_grid(3, 2, TEST_GRID_FLAT, 2, &ctx);
     memcpy(mesh->faces + 36, mesh->faces + 9, 3 * sizeof(int32_t));
     memcpy(mesh->faces + 39, mesh->faces + 21, 3 * sizeof(int32_t));
     mesh->face_labels = calloc(14, sizeof(int32_t));
@@ -263,7 +203,7 @@ static void test_repairs(void)
     /* Zero-area face dropped; the vertex only it used goes too. */
     static const double collinear[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 2, 0, 0};
     static const int32_t sliver[] = {1, 0, 3, 0, 1, 2};
-    mesh = mesh_from(4, collinear, 2, sliver);
+    mesh = test_mesh_from(4, collinear, 2, sliver, &ctx);
     CHECK(pz_mesh_prepare(mesh, "sliver.obj", PZ_REPAIR_NONE, &ctx) == PZ_ERR_INVALID_MESH, "sliver refused");
     CHECK(strstr(ctx.error, "sliver.obj: invalid mesh: 1 degenerate") == ctx.error, "message: %s", ctx.error);
     CHECK(pz_mesh_prepare(mesh, "sliver.obj", PZ_REPAIR_DROP_DEGENERATE, &ctx) == PZ_OK, "%s", ctx.error);
@@ -274,7 +214,7 @@ static void test_repairs(void)
 
     /* Several kinds at once: the message names the first and counts the rest. */
     static const int32_t messy[] = {0, 1, 2, 0, 3, 4, 2, 1, 1};
-    mesh = mesh_from(5, five, 3, messy);
+    mesh = test_mesh_from(5, five, 3, messy, &ctx);
     mesh->positions[14] = NAN;
     CHECK(pz_mesh_prepare(mesh, "messy.ply", PZ_REPAIR_NONE, &ctx) == PZ_ERR_INVALID_MESH, "messy refused");
     CHECK(strstr(ctx.error, "messy.ply: invalid mesh: 1 vertex with non-finite") == ctx.error &&
@@ -284,7 +224,7 @@ static void test_repairs(void)
     pz_mesh_free(&mesh);
 
     /* A clean mesh with a stray vertex passes, minus the vertex. */
-    mesh = mesh_from(5, five, 1, messy);
+    mesh = test_mesh_from(5, five, 1, messy, &ctx);
     CHECK(pz_mesh_prepare(mesh, "stray.obj", PZ_REPAIR_NONE, &ctx) == PZ_OK, "%s", ctx.error);
     CHECK(mesh->vertex_count == 3, "stray vertices dropped");
     pz_mesh_free(&mesh);
@@ -295,12 +235,12 @@ static void test_drop_unreferenced(void)
     /* Vertices 0 and 3 unused: 1 2 4 become 0 1 2, in the rest pose and both poses. */
     static const double positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 9, 9, 9, 1, 1, 0};
     static const int32_t faces[] = {1, 4, 2};
-    pz_mesh *mesh = mesh_from(5, positions, 1, faces);
+    pz_mesh *mesh = test_mesh_from(5, positions, 1, faces, &ctx);
     double pose[15];
     for (int p = 0; p < 2; ++p) {
         for (int i = 0; i < 15; ++i)
             pose[i] = positions[i] + 10.0 * (p + 1);
-        REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx));
+        REQUIRE_OK(pz_mesh_add_pose(mesh, pose, &ctx), ctx);
     }
     int32_t removed = -1;
     CHECK(pz_mesh_drop_unreferenced(mesh, &removed, &ctx) == PZ_OK, "%s", ctx.error);
@@ -330,7 +270,7 @@ static void test_random_meshes(void)
     for (int trial = 0; trial < 3000; ++trial) {
         int32_t vertex_count = 4 + trial % 5, face_count = 1 + trial % 9;
         pz_mesh *mesh = NULL;
-        REQUIRE_OK(pz_mesh_create(vertex_count, face_count, &mesh, &ctx));
+        REQUIRE_OK(pz_mesh_create(vertex_count, face_count, &mesh, &ctx), ctx);
         for (int32_t i = 0; i < 3 * vertex_count; ++i) {
             state = state * 1664525u + 1013904223u;
             mesh->positions[i] = (double)(state >> 8) / (double)(1u << 24);
@@ -341,7 +281,7 @@ static void test_random_meshes(void)
             mesh->faces[c] = pick;
         }
         pz_validation v;
-        REQUIRE_OK(pz_mesh_validate(mesh, &v, &ctx));
+        REQUIRE_OK(pz_mesh_validate(mesh, &v, &ctx), ctx);
         pz_topology *topology = NULL;
         if (pz_validation_ok(&v)) {
             ++passed;
@@ -369,12 +309,12 @@ int main(void)
     pz_ctx_init(&ctx);
     ctx.quiet = 1;
     test_each_problem();
-    test_moebius();
+    test_moebius_band();
     test_repairs();
     test_drop_unreferenced();
     test_random_meshes();
     pz_mesh *empty = NULL;
-    REQUIRE_OK(pz_mesh_create(0, 0, &empty, &ctx));
+    REQUIRE_OK(pz_mesh_create(0, 0, &empty, &ctx), ctx);
     check_validation(empty, "empty mesh", (expected){0, 0, 0, 0, 0, 0, 0, 0, NULL});
     pz_mesh_free(&empty);
     return test_finish();

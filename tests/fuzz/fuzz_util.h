@@ -1,0 +1,45 @@
+/*
+ * tests/fuzz/fuzz_util.h -- what every libFuzzer target here does around its
+ * parser call: a quiet context, and validation of whatever parsed (to
+ * exercise its arrays) before it is freed. Still one target per parser:
+ *
+ *     pz_ctx ctx;
+ *     fuzz_ctx_init(&ctx);
+ *     pz_mesh *mesh = NULL;
+ *     pz_status status = pz_obj_read_memory((const char *)data, size, "fuzz.obj", &mesh, &ctx);
+ *     return fuzz_end(status, &mesh, &ctx);
+ *
+ * A mesh a failing parser leaves behind is not freed here: the leak checker
+ * is to report it.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_FUZZ_UTIL_H
+#define PZ_FUZZ_UTIL_H
+
+#include "mesh/mesh.h"
+
+#include <stddef.h>
+#include <stdint.h>
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static inline void fuzz_ctx_init(pz_ctx *ctx)
+{
+    pz_ctx_init(ctx);
+    ctx->quiet = 1;
+}
+
+/* After the parser: a mesh that parsed is validated and freed. Returns 0, libFuzzer's "keep going". */
+static inline int fuzz_end(pz_status status, pz_mesh **mesh, pz_ctx *ctx)
+{
+    if (status == PZ_OK) {
+        pz_validation validation;
+        if (pz_mesh_validate(*mesh, &validation, ctx) == PZ_OK)
+            pz_validation_clear(&validation);
+        pz_mesh_free(mesh);
+    }
+    return 0;
+}
+
+#endif
