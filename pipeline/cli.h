@@ -32,8 +32,31 @@ enum pz_cli_option {
     PZ_CLI_OPT_OUTPUT = 1u << 5,  /* -o FILE / --output FILE */
     PZ_CLI_OPT_FACES = 1u << 6,   /* --faces N */
     PZ_CLI_OPT_POSES = 1u << 7,   /* --poses K */
-    PZ_CLI_OPT_OPEN = 1u << 8     /* --open */
+    PZ_CLI_OPT_OPEN = 1u << 8,    /* --open */
+    /* Options whose raw text is kept for the command to parse (values[]): */
+    PZ_CLI_OPT_PANELS = 1u << 9,      /* --panels FILE|uv */
+    PZ_CLI_OPT_SEAMS = 1u << 10,      /* --seams FILE (repeatable) */
+    PZ_CLI_OPT_DARTS = 1u << 11,      /* --darts FILE (repeatable) */
+    PZ_CLI_OPT_GRAIN = 1u << 12,      /* --grain X,Y,Z */
+    PZ_CLI_OPT_BACKEND = 1u << 13,    /* --backend NAME */
+    PZ_CLI_OPT_ITERATIONS = 1u << 14, /* --iterations N */
+    PZ_CLI_OPT_WEIGHTS = 1u << 15,    /* --weights S,R,D,M */
+    PZ_CLI_OPT_FABRIC = 1u << 16,     /* --fabric KSU,KSV,KR */
+    PZ_CLI_OPT_SKETCH = 1u << 17,     /* --sketch FILE */
+    PZ_CLI_OPT_SCALES = 1u << 18,     /* --scales K */
+    PZ_CLI_OPT_SMOOTHNESS = 1u << 19  /* --smoothness W */
 };
+
+/** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
+#define PZ_CLI_VALUE_FIRST_BIT 9
+#define PZ_CLI_VALUE_COUNT 11
+static inline int pz_cli_value_index(unsigned flag)
+{
+    int bit = 0;
+    while (!(flag & (1u << bit)))
+        ++bit;
+    return bit - PZ_CLI_VALUE_FIRST_BIT;
+}
 
 /** Options every command takes. */
 #define PZ_CLI_OPT_COMMON (PZ_CLI_OPT_QUIET | PZ_CLI_OPT_JSON)
@@ -51,9 +74,21 @@ typedef struct pz_cli_args {
     int32_t target_faces;       /* --faces; 0 = the generator's default */
     int32_t pose_count;         /* --poses */
     int open;                   /* --open */
+    const char *values[PZ_CLI_VALUE_COUNT]; /* raw text of --panels ... --smoothness, or NULL;
+                                               read with pz_cli_value(args, PZ_CLI_OPT_X) */
+    const char **seam_paths;    /* --seams files, in order (owned array) */
+    int seam_path_count;
+    const char **dart_paths;    /* --darts files, in order (owned array) */
+    int dart_path_count;
     const char **positionals;   /* arguments that are not options (owned array) */
     int positional_count;
 } pz_cli_args;
+
+/** The raw text of a value option (PZ_CLI_OPT_PANELS ... PZ_CLI_OPT_SMOOTHNESS), or NULL when absent. */
+static inline const char *pz_cli_value(const pz_cli_args *args, unsigned flag)
+{
+    return args->values[pz_cli_value_index(flag)];
+}
 
 /** One command of the table in main.c. */
 typedef struct pz_cli_command {
@@ -68,6 +103,10 @@ typedef struct pz_cli_command {
 pz_status pz_cli_info(const pz_cli_args *args, pz_ctx *ctx);
 pz_status pz_cli_check(const pz_cli_args *args, pz_ctx *ctx);
 pz_status pz_cli_generate(const pz_cli_args *args, pz_ctx *ctx);
+pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_flatten.c */
+pz_status pz_cli_field(const pz_cli_args *args, pz_ctx *ctx);     /* cmd_field.c */
+extern const char pz_cli_flatten_usage[];
+extern const char pz_cli_field_usage[];
 extern const char pz_cli_info_usage[];
 extern const char pz_cli_check_usage[];
 extern const char pz_cli_generate_usage[];

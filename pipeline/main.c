@@ -37,6 +37,17 @@ static const pz_cli_command command_table[] = {
      pz_cli_generate_usage,
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_OUTPUT | PZ_CLI_OPT_FACES | PZ_CLI_OPT_POSES | PZ_CLI_OPT_OPEN,
      pz_cli_generate},
+    {"flatten", "flatten every panel of a garment into a sewing pattern",
+     pz_cli_flatten_usage,
+     PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
+         PZ_CLI_OPT_PANELS | PZ_CLI_OPT_SEAMS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND |
+         PZ_CLI_OPT_ITERATIONS | PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC,
+     pz_cli_flatten},
+    {"field", "compute the curvature-aligned cross-field that guides the seams",
+     pz_cli_field_usage,
+     PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
+         PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_SCALES | PZ_CLI_OPT_SMOOTHNESS,
+     pz_cli_field},
 };
 static const size_t command_table_count = sizeof command_table / sizeof command_table[0];
 
@@ -57,6 +68,17 @@ static const option_spec option_table[] = {
     {"faces", 0, PZ_CLI_OPT_FACES, 1},
     {"poses", 0, PZ_CLI_OPT_POSES, 1},
     {"open", 0, PZ_CLI_OPT_OPEN, 0},
+    {"panels", 0, PZ_CLI_OPT_PANELS, 1},
+    {"seams", 0, PZ_CLI_OPT_SEAMS, 1},
+    {"darts", 0, PZ_CLI_OPT_DARTS, 1},
+    {"grain", 0, PZ_CLI_OPT_GRAIN, 1},
+    {"backend", 0, PZ_CLI_OPT_BACKEND, 1},
+    {"iterations", 0, PZ_CLI_OPT_ITERATIONS, 1},
+    {"weights", 0, PZ_CLI_OPT_WEIGHTS, 1},
+    {"fabric", 0, PZ_CLI_OPT_FABRIC, 1},
+    {"sketch", 0, PZ_CLI_OPT_SKETCH, 1},
+    {"scales", 0, PZ_CLI_OPT_SCALES, 1},
+    {"smoothness", 0, PZ_CLI_OPT_SMOOTHNESS, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 
@@ -152,6 +174,16 @@ static pz_status apply_option(pz_cli_args *args, const option_spec *spec, const 
         return parse_count(command, "--faces", value, 1, PZ_CLI_MAX_FACES, &args->target_faces, ctx);
     case PZ_CLI_OPT_POSES:
         return parse_count(command, "--poses", value, 0, PZ_CLI_MAX_POSES, &args->pose_count, ctx);
+    case PZ_CLI_OPT_SEAMS: args->seam_paths[args->seam_path_count++] = value; return PZ_OK;
+    case PZ_CLI_OPT_DARTS: args->dart_paths[args->dart_path_count++] = value; return PZ_OK;
+    }
+    if (spec->flag >= (1u << PZ_CLI_VALUE_FIRST_BIT)) {
+        /* Value options: the command parses the text; given twice is a mistake worth naming. */
+        const char **slot = &args->values[pz_cli_value_index(spec->flag)];
+        if (*slot)
+            return pz_error(ctx, PZ_ERR_USAGE, "%s: --%s given twice", command, spec->long_name);
+        *slot = value;
+        return PZ_OK;
     }
     return pz_error(ctx, PZ_ERR_INTERNAL, "%s: option table and parser disagree", command);
 }
@@ -197,6 +229,8 @@ static pz_status parse_option(pz_cli_args *args, unsigned accepted, int argc, ch
 static void clear_args(pz_cli_args *args)
 {
     free(args->pose_paths);
+    free(args->seam_paths);
+    free(args->dart_paths);
     free(args->positionals);
     memset(args, 0, sizeof *args);
 }
@@ -211,7 +245,9 @@ static pz_status parse_args(const pz_cli_command *command, int argc, char **argv
     /* Every argument is at most one pose path or one positional: argc bounds both arrays. */
     args->pose_paths = calloc((size_t)argc + 1, sizeof *args->pose_paths);
     args->positionals = calloc((size_t)argc + 1, sizeof *args->positionals);
-    if (!args->pose_paths || !args->positionals) {
+    args->seam_paths = calloc((size_t)argc + 1, sizeof *args->seam_paths);
+    args->dart_paths = calloc((size_t)argc + 1, sizeof *args->dart_paths);
+    if (!args->pose_paths || !args->positionals || !args->seam_paths || !args->dart_paths) {
         clear_args(args);
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", command->name);
     }

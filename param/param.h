@@ -1,0 +1,264 @@
+/*
+ * param/param.h -- the public face of panelize's flattening stage.
+ *
+ * A garment with given panels becomes a *pattern*: the mesh is cut along
+ * every seam (and along a cut path inside each panel that is not a disk), so
+ * each panel is one disk-shaped component of the cut mesh; seams and darts
+ * are lists of facing vertex pairs of that cut mesh. Flattening computes a 2D
+ * position (mm) for every vertex of the cut mesh; metrics measure how the
+ * flat pieces fit the 3D garment.
+ *
+ *   pz_pattern_build   panels + seams/darts  -> pz_pattern (cut mesh, seams)
+ *   pz_param_lscm      one disk              -> initial UVs (Levy 2002)
+ *   pz_param_textile   a whole pattern       -> UVs (pietroni2022 Sec. 4.3)
+ *   pz_metrics_compute a pattern + UVs       -> per-triangle/panel/seam figures
+ *
+ * Conventions are those of mesh/mesh.h (status, ctx last, ownership).
+ * Design notes: docs/param.md (flattening), docs/pattern.md (panels, seams,
+ * darts and their file format), docs/metrics.md (every metric).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_PARAM_H
+#define PZ_PARAM_H
+
+#include "mesh/mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------ */
+/* Patterns: panels, seams, darts                                            */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Two boundary polylines of the cut mesh that are sewn together. side_a[i]
+ * and side_b[i] are copies of the same garment vertex (same 3D position), in
+ * order along the seam. A seam between a panel and itself (the cut that
+ * opens a tube) has panel_a == panel_b.
+ */
+typedef struct pz_seam {
+    int32_t panel_a, panel_b;
+    int32_t pair_count;
+    int32_t *side_a;   /* pair_count vertices of the cut mesh */
+    int32_t *side_b;   /* pair_count vertices of the cut mesh */
+} pz_seam;
+
+/**
+ * A dart: two legs of one panel that meet at the tip. leg_a[i] and leg_b[i]
+ * face each other (they are sewn together); the tip is shared by both legs.
+ */
+typedef struct pz_dart {
+    int32_t panel;
+    int32_t tip;       /* vertex of the cut mesh */
+    int32_t pair_count;
+    int32_t *leg_a;    /* pair_count vertices of the cut mesh */
+    int32_t *leg_b;
+} pz_dart;
+
+/**
+ * A garment cut into panels. Owns everything; free with pz_pattern_free.
+ * `mesh` is the cut mesh: its faces are the garment's faces in the same
+ * order, its vertices copies of garment vertices (vertex_origin), with the
+ * garment's poses carried along. Every panel is one connected disk of it.
+ */
+typedef struct pz_pattern {
+    pz_mesh *mesh;             /* the cut mesh (owned) */
+    int32_t *vertex_origin;    /* mesh->vertex_count: the garment vertex of each cut-mesh vertex */
+    int32_t panel_count;
+    int32_t *face_panel;       /* mesh->face_count: panel id 0..panel_count-1 */
+    int32_t seam_count;
+    pz_seam *seams;
+    int32_t dart_count;
+    pz_dart *darts;
+} pz_pattern;
+
+void pz_pattern_free(pz_pattern **pattern);
+
+/**
+ * Explicit correspondences given by the user (the format of
+ * ../shared/data/seams/, docs/pattern.md): vertex indices refer to the
+ * *garment* mesh; pz_pattern_build maps them onto the cut mesh.
+ */
+typedef struct pz_correspondences {
+    int32_t seam_count;
+    pz_seam *seams;    /* side_a/side_b: garment vertices; panel ids ignored (derived) */
+    int32_t dart_count;
+    pz_dart *darts;    /* tip/legs: garment vertices; panel ignored (derived) */
+} pz_correspondences;
+
+void pz_correspondences_clear(pz_correspondences *correspondences);
+
+/**
+ * Builds a pattern from a valid garment mesh and a panel id per face:
+ *  - edges between faces of different panels are cut, and so are the edges
+ *    in `extra_cuts` (edge flags over pz_topology_build(garment) edges, may be
+ *    NULL): `--panels uv` passes the UV seams inside an island here;
+ *  - a panel that is not a disk is cut into one: for each extra boundary loop
+ *    the shortest edge path (Dijkstra, lengths in mm) joining it to another
+ *    loop becomes a self-seam; a closed panel (no boundary) or one of genus >
+ *    0 is PZ_ERR_DATA naming the panel;
+ *  - seams are found automatically: maximal chains of cut edges between the
+ *    same two panels (or a panel and itself), oriented and paired vertex by
+ *    vertex; `explicit` (may be NULL) adds or replaces correspondences
+ *    (garment vertex ids; a seam whose vertices are not on a cut is
+ *    PZ_ERR_DATA).
+ * `path` names the input in error messages. Panel ids must be 0..K-1 with
+ * every id used (PZ_ERR_DATA otherwise).
+ */
+pz_status pz_pattern_build(const pz_mesh *garment, const int32_t *face_panel, const uint8_t *extra_cuts,
+                           const pz_correspondences *explicit_correspondences, const char *path,
+                           pz_pattern **out, pz_ctx *ctx);
+
+/**
+ * Panels from the mesh's own UVs (`--panels uv`): each UV island (faces
+ * connected through edges whose two sides share UV indices) is a panel, and
+ * every edge whose two sides have different UV indices is a cut, also inside
+ * an island. Writes face_panel (face_count, caller's buffer), *panel_count,
+ * and *extra_cuts (edge flags over pz_topology_build(mesh) edges; caller
+ * frees). PZ_ERR_DATA when the mesh has no UVs.
+ */
+pz_status pz_pattern_panels_from_uv(const pz_mesh *mesh, int32_t *face_panel, int32_t *panel_count,
+                                    uint8_t **extra_cuts, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Flattening                                                                */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * Least squares conformal map (Levy et al. 2002) of one disk-topology mesh,
+ * solved with CHOLMOD, then rotated so that the projected 3D `grain` axis
+ * (NULL = +z) runs along +v and scaled so that the 2D area equals the 3D
+ * area. uv: vertex_count x 2, written. PZ_ERR_DATA for a mesh that is not a
+ * single disk.
+ */
+pz_status pz_param_lscm(const pz_mesh *disk, const double grain[3], double *uv, pz_ctx *ctx);
+
+/** Textile parameterization options. Zero-initialized = defaults. */
+typedef struct pz_textile_options {
+    int iterations;           /* 0 = 20 */
+    double tolerance;         /* relative energy change that stops early; 0 = 1e-6 */
+    int weights_given;        /* 1: use the weights below; 0 = defaults (5, 1, 5, 5) */
+    double weight_stretch;    /* omega_stretch, Eq. 5 */
+    double weight_rigid;      /* omega_rigid, Eq. 6 */
+    double weight_dart;       /* omega_dart, Eq. 9 */
+    double weight_seam;       /* omega_seam, Eq. 8 */
+    int grain_given;          /* 1: use `grain`; 0 = +z (the garment's vertical) */
+    double grain[3];          /* 3D warp axis */
+    int use_poses;            /* 1: average the right-hand sides over the rest pose and every pose */
+    int threads;              /* OpenMP threads; 0 = default */
+} pz_textile_options;
+
+/** Outcomes that are not errors. */
+typedef struct pz_textile_result {
+    int iterations_run;
+    double initial_energy;
+    double final_energy;
+    int converged;            /* 1: stopped on the tolerance, 0: on the iteration cap */
+    double init_ms;           /* LSCM initialization */
+    double solve_ms;          /* all iterations */
+    double iteration_ms;      /* mean per iteration */
+} pz_textile_result;
+
+/**
+ * The anisotropic textile parameterization of pietroni2022 Sec. 4.3: local /
+ * global iterations of warp and weft stretch (Eqs. 1-5), ARAP rigidity with
+ * per-triangle Procrustes (Eq. 6), seam reflection symmetry (Eqs. 7-8), dart
+ * symmetry (Eq. 9) and grain alignment, from an LSCM start. All panels are
+ * iterated jointly so seam partners see each other's latest positions.
+ * uv: pattern->mesh->vertex_count x 2, written (mm). result may be NULL.
+ */
+pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *options, double *uv,
+                           pz_textile_result *result, pz_ctx *ctx);
+
+/** LSCM only, panel by panel (the `--backend lscm` path), grain-oriented. */
+pz_status pz_param_lscm_pattern(const pz_pattern *pattern, const double grain[3], double *uv, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Metrics                                                                   */
+/* ------------------------------------------------------------------------ */
+
+/** max, 95th percentile and area-weighted mean of a per-triangle quantity. */
+typedef struct pz_stat {
+    double max, p95, mean;
+} pz_stat;
+
+/** Fabric constants of mccartney2005 (Eqs. 8-9). Zero = the paper's. */
+typedef struct pz_fabric {
+    double k_su;   /* tensile stiffness along u (the weft, mccartney2005's K_su), N/mm; default 0.946 */
+    double k_sv;   /* tensile stiffness along v (the warp, K_sv), N/mm; default 0.548 */
+    double k_r;    /* shear stiffness, N/mm/rad; default 0.159 */
+} pz_fabric;
+
+typedef struct pz_panel_metrics {
+    int32_t panel;
+    int32_t face_count;
+    double area_3d_mm2, area_2d_mm2;
+    pz_stat strain_warp;      /* |J_1| - 1 (J: pattern -> garment); signed values, max of |.| */
+    pz_stat strain_weft;      /* |J_2| - 1 */
+    pz_stat shear_deg;        /* angle between warp and weft threads in 3D minus 90 */
+    double orthotropic_energy;  /* mccartney2005 Eq. 9, summed, N*mm */
+    double arap_energy;       /* sum over triangles of area * ||J - R||_F^2 */
+    double e_len;             /* wang2008 Eq. 26 over the panel's boundary edges */
+    double e_ang;             /* wang2008 Eq. 27 */
+    double e_area;            /* wang2002 Eq. 4 (area accuracy summed per triangle; docs/metrics.md) */
+    double e_shape;           /* wang2002 Eq. 6 */
+    int32_t flipped_triangles;
+    int32_t boundary_self_intersections;
+} pz_panel_metrics;
+
+typedef struct pz_seam_metrics {
+    int32_t seam;
+    int32_t panel_a, panel_b;
+    double length_3d_mm, length_a_mm, length_b_mm;
+    double mismatch_rel;           /* |length_a - length_b| / length_3d */
+    double reflection_residual_mm; /* RMS distance after the best-fit reflection of side a onto side b */
+} pz_seam_metrics;
+
+typedef struct pz_dart_metrics {
+    int32_t dart;
+    double leg_a_mm, leg_b_mm;
+    double mismatch_rel;
+    double symmetry_residual_mm;   /* RMS distance of leg b to leg a mirrored about the best axis through the tip */
+} pz_dart_metrics;
+
+typedef struct pz_metrics {
+    int32_t face_count;
+    double *strain_warp;      /* face_count */
+    double *strain_weft;      /* face_count */
+    double *shear_deg;        /* face_count */
+    int32_t panel_count;
+    pz_panel_metrics *panels;
+    int32_t seam_count;
+    pz_seam_metrics *seams;
+    int32_t dart_count;
+    pz_dart_metrics *darts;
+    double max_abs_strain;    /* over all panels and poses measured */
+    double max_seam_mismatch_rel;
+    int injective;            /* no flipped triangle and no boundary self-intersection */
+} pz_metrics;
+
+/**
+ * Measures a flattened pattern against the rest pose (or, with pose >= 1,
+ * against extra pose pose-1). uv: pattern->mesh->vertex_count x 2. fabric
+ * may be NULL (defaults). Boundary self-intersections are found with a
+ * sweep over segment bounding boxes, O(n log n). Caller frees *out.
+ */
+pz_status pz_metrics_compute(const pz_pattern *pattern, const double *uv, int pose, const pz_fabric *fabric,
+                             pz_metrics **out, pz_ctx *ctx);
+void pz_metrics_free(pz_metrics **metrics);
+
+/**
+ * Per-triangle strain of one triangle: p3[3][3] garment positions, p2[3][2]
+ * pattern positions. Writes warp and weft strain (|J_1| - 1, |J_2| - 1) and
+ * shear in degrees; the building block the tests check by hand.
+ */
+void pz_metrics_triangle_strain(const double p3[3][3], const double p2[3][2], double *strain_warp,
+                                double *strain_weft, double *shear_deg);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PZ_PARAM_H */

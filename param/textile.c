@@ -1,0 +1,930 @@
+/*
+ * param/textile.c -- the anisotropic textile parameterization of
+ * pietroni2022 Sec. 4.3, a local/global iteration over all panels at once.
+ *
+ * Start: LSCM per panel, oriented so the projected grain runs along +v
+ * (param/lscm.c). Then, each iteration:
+ *
+ *  1. Grain alignment: every panel is turned rigidly about its centroid so
+ *     the area-weighted projected 3D grain follows +v (the warp; Sec. 4.3
+ *     "Grain alignment": not part of the energy, re-imposed every step).
+ *  2. Local step, per triangle, from the current 2D triangle ABC and the 3D
+ *     triangle A'B'C' (in its own orthonormal frame), for the rest pose and,
+ *     with use_poses, every pose, the results averaged (Sec. 4.3, last
+ *     paragraph: only right-hand sides depend on the 3D shape):
+ *       - stretch (Eqs. 2-5): the barycentric differences of G_u = G + (1,0)
+ *         and G are the u-derivatives of the hat functions on ABC,
+ *         c_u = d(alpha, beta, gamma)/du, likewise c_v; s_u = |sum c_u,i X'_i|
+ *         and s_v are the 3D lengths of the images of the unit grain vectors.
+ *         Residuals s_u - c_u . u and s_v - c_v . v.
+ *       - rigidity (Eq. 6): R = the best rotation of A'B'C' onto ABC
+ *         (2x2 Procrustes in closed form), edge targets R (X'_j - X'_i).
+ *     Seams (Eqs. 7-8): the best-fit reflection M (Procrustes with det = -1,
+ *     plus translation) of side a onto side b; targets (M p + q)/2 and
+ *     (p + M^-1 q)/2. Darts (Eq. 9): the axis through the tip that best fits
+ *     the leg midpoints (principal direction), targets the averages of each
+ *     leg point with its mirrored partner.
+ *  3. Global step: minimize Eq. 10 with those coefficients and targets fixed.
+ *     No term couples u with v (the stretch rows involve one coordinate, the
+ *     edge targets are per coordinate), so each panel gives two independent
+ *     n x n SPD systems. They share one sparsity pattern (the panel's vertex
+ *     adjacency) but not their values (c_u != c_v), so each has its own
+ *     matrix and factor; CHOLMOD's symbolic analysis is done once per panel
+ *     at setup and copied. The matrix changes every iteration (c depends on
+ *     the 2D triangles), but slowly: each system is solved by conjugate
+ *     gradients preconditioned with the factor of an earlier iteration's
+ *     matrix, and refactorized (numerically only) when that factor has gone
+ *     stale (pcg_solve). Panels are independent given the seam targets, so
+ *     the 2 x panels systems are solved in parallel (OpenMP).
+ *
+ * Scales (where the paper is silent; docs/param.md): the stretch residual is
+ * dimensionless, so each triangle's stretch term is weighted by its 3D area,
+ * which makes it comparable to the edge (mm^2) rigidity term and independent
+ * of the mesh resolution and the units. A panel's energy is invariant under
+ * translation, so 1e-8 * max(1, w_stretch + w_rigid) times the squared
+ * distance of every vertex to its current position is added: it fixes the
+ * null space without measurably biasing the solution.
+ *
+ * Stopping: after `iterations` global steps (20), or when the energy of the
+ * current iterate (evaluated in the local step) changed by no more than
+ * `tolerance` (1e-6) relative to the previous one. A last grain alignment
+ * and the side-by-side layout (lscm.c) follow.
+ *
+ * Cost per iteration: O(F) for the local step and the assembly (a scatter
+ * into precomputed CSC slots, no allocation), plus a few triangular solves
+ * per coordinate and an occasional numeric factorization. Memory: per face
+ * 3 doubles per pose (the 3D frame coordinates), 2 (the grain in the frame),
+ * the local-step output (14 doubles) and 6 matrix slots; per panel two CSC
+ * matrices and two factors. Failure modes: PZ_ERR_DATA (a panel that is not a
+ * disk, a seam vertex out of range), PZ_ERR_NOMEM, PZ_ERR_INTERNAL (CHOLMOD
+ * reports a matrix that is not positive definite: should not happen since
+ * the regularized system is SPD).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "param.h"
+
+#include <cholmod.h>
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Bounds of the PCG step budget (see pcg_solve). */
+#define PCG_MIN_STEPS 4
+#define PCG_MAX_STEPS 60
+
+/* Below this many faces an iteration takes well under a millisecond and
+ * OpenMP's fork/join (and, on a busy machine, descheduled threads at the
+ * barriers) costs more than it saves: everything runs on one thread. */
+#define PARALLEL_MIN_FACES 8192
+
+/* Shared with param/lscm.c (see there). */
+double pz_param_face_frame(const double *pos, const int32_t *face, double local[3], double e1[3], double e2[3]);
+void pz_param_rotate_vertices(const int32_t *vertex_ids, int32_t vertex_count, double angle, double *uv);
+pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
+void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const int32_t *order, double *uv);
+
+/* One n x n SPD system of one panel and one coordinate, with its own CHOLMOD
+ * workspace (CHOLMOD commons are not shared between threads). */
+typedef struct coordinate_solver {
+    int started;
+    cholmod_common common;
+    cholmod_sparse *matrix;   /* upper triangle, fixed pattern */
+    cholmod_factor *factor;   /* symbolic once, numeric every iteration */
+    cholmod_dense *rhs, *solution, *work_y, *work_e;
+    cholmod_dense *residual;  /* PCG: r, the right-hand side of the preconditioner solve */
+    double *direction, *product, *current; /* PCG: p, A p and the iterate */
+    int factored;             /* the factor holds some earlier matrix's numbers */
+    int refactor;             /* 1: factorize before the next solve */
+    int direct_runs;          /* after PCG failed: solve directly this many more times */
+    int backoff;              /* the next such pause (doubles on repeated failures) */
+    int max_steps;            /* PCG gives up after this many steps (about one factorization's cost) */
+} coordinate_solver;
+
+typedef struct panel_system {
+    int32_t vertex_count;
+    int32_t *vertices;        /* local -> cut-mesh vertex */
+    int32_t *slots;           /* per panel face: 6 value slots: (0,0) (1,1) (2,2) (0,1) (0,2) (1,2) */
+    coordinate_solver solver[2];
+} panel_system;
+
+/* The local step's output for one face. */
+typedef struct face_terms {
+    double c[2][3];           /* stretch coefficients for u and v */
+    double s[2];              /* stretch targets s_u, s_v (pose average) */
+    double t[3][2];           /* rigid edge targets for edges 0->1, 1->2, 2->0 */
+} face_terms;
+
+typedef struct textile_state {
+    const pz_pattern *pattern;
+    double w_stretch, w_rigid, w_dart, w_seam, regularization;
+    double grain[3];
+    int threads;
+    int parallel;             /* 1: big enough for threads to pay (PARALLEL_MIN_FACES) */
+    int32_t pose_total;       /* 1 + poses used */
+    double *frames;           /* face_count x pose_total x 3: x1, x2, y2 of the 3D triangle's frame */
+    double *areas;            /* face_count: rest 3D area */
+    double *grain_local;      /* face_count x 2: the grain projected onto the rest face, in its frame */
+    face_terms *terms;        /* face_count */
+    int32_t *vertex_local;    /* vertex_count: index within its panel */
+    double *pull_weight;      /* vertex_count: summed seam/dart weights */
+    double *pull_target;      /* vertex_count x 2: weighted sums of seam/dart targets */
+    int32_t *offsets, *order; /* faces bucketed by panel */
+    panel_system *panels;
+} textile_state;
+
+/* ------------------------------------------------------------------------ */
+/* Setup                                                                     */
+/* ------------------------------------------------------------------------ */
+
+static void solver_free(coordinate_solver *solver)
+{
+    if (!solver->started)
+        return;
+    cholmod_free_dense(&solver->work_e, &solver->common);
+    cholmod_free_dense(&solver->work_y, &solver->common);
+    cholmod_free_dense(&solver->solution, &solver->common);
+    cholmod_free_dense(&solver->rhs, &solver->common);
+    cholmod_free_dense(&solver->residual, &solver->common);
+    free(solver->direction);
+    free(solver->product);
+    free(solver->current);
+    cholmod_free_factor(&solver->factor, &solver->common);
+    cholmod_free_sparse(&solver->matrix, &solver->common);
+    cholmod_finish(&solver->common);
+    solver->started = 0;
+}
+
+static void state_free(textile_state *state)
+{
+    if (state->panels)
+        for (int32_t p = 0; p < state->pattern->panel_count; ++p) {
+            solver_free(&state->panels[p].solver[0]);
+            solver_free(&state->panels[p].solver[1]);
+            free(state->panels[p].vertices);
+            free(state->panels[p].slots);
+        }
+    free(state->panels);
+    free(state->frames);
+    free(state->areas);
+    free(state->grain_local);
+    free(state->terms);
+    free(state->vertex_local);
+    free(state->pull_weight);
+    free(state->pull_target);
+    free(state->offsets);
+    free(state->order);
+}
+
+/* Index of entry (row, col), row <= col, in the sorted upper CSC matrix. */
+static int32_t find_slot(const cholmod_sparse *matrix, int32_t row, int32_t col)
+{
+    const int *colp = matrix->p, *rows = matrix->i;
+    int lo = colp[col], hi = colp[col + 1] - 1;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (rows[mid] < row)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Builds one panel's vertex list, sparsity pattern, slots, and the symbolic
+ * factorization shared by its u and v systems. 0 on success, else a status
+ * (message in *message). */
+static pz_status panel_setup(textile_state *state, int32_t panel, char *message, size_t message_size)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    panel_system *system = &state->panels[panel];
+    const int32_t *faces = state->order + state->offsets[panel];
+    int32_t count = state->offsets[panel + 1] - state->offsets[panel];
+    system->vertices = malloc((size_t)3 * count * sizeof(int32_t) + 1);
+    system->slots = malloc((size_t)6 * count * sizeof(int32_t) + 1);
+    if (!system->vertices || !system->slots) {
+        snprintf(message, message_size, "textile: out of memory");
+        return PZ_ERR_NOMEM;
+    }
+    /* Vertices in order of first use: vertex_local doubles as the "seen" mark
+     * (every vertex belongs to one panel, so the panels write disjoint entries). */
+    int32_t n = 0;
+    for (int32_t i = 0; i < 3 * count; ++i) {
+        int32_t v = mesh->faces[3 * faces[i / 3] + i % 3];
+        if (state->vertex_local[v] < 0) {
+            state->vertex_local[v] = n;
+            system->vertices[n++] = v;
+        }
+    }
+    system->vertex_count = n;
+    for (int k = 0; k < 2; ++k) {
+        cholmod_start(&system->solver[k].common);
+        system->solver[k].started = 1;
+        system->solver[k].common.supernodal = CHOLMOD_SIMPLICIAL;
+    }
+    coordinate_solver *su = &system->solver[0], *sv = &system->solver[1];
+    cholmod_triplet *triplet = cholmod_allocate_triplet(n, n, (size_t)6 * count, 1, CHOLMOD_REAL, &su->common);
+    if (!triplet) {
+        snprintf(message, message_size, "textile: out of memory");
+        return PZ_ERR_NOMEM;
+    }
+    static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    int *ti = triplet->i, *tj = triplet->j;
+    double *tx = triplet->x;
+    for (int32_t f = 0; f < count; ++f) {
+        const int32_t *face = mesh->faces + 3 * faces[f];
+        for (int e = 0; e < 6; ++e) {
+            int32_t a = state->vertex_local[face[pair[e][0]]], b = state->vertex_local[face[pair[e][1]]];
+            ti[triplet->nnz] = a < b ? a : b;
+            tj[triplet->nnz] = a < b ? b : a;
+            tx[triplet->nnz++] = 1;
+        }
+    }
+    su->matrix = cholmod_triplet_to_sparse(triplet, 0, &su->common);
+    cholmod_free_triplet(&triplet, &su->common);
+    if (su->matrix) {
+        for (int32_t f = 0; f < count; ++f) {
+            const int32_t *face = mesh->faces + 3 * faces[f];
+            for (int e = 0; e < 6; ++e) {
+                int32_t a = state->vertex_local[face[pair[e][0]]], b = state->vertex_local[face[pair[e][1]]];
+                system->slots[6 * f + e] = find_slot(su->matrix, a < b ? a : b, a < b ? b : a);
+            }
+        }
+        su->factor = cholmod_analyze(su->matrix, &su->common);
+        /* The factorization costs `ratio` PCG steps (flops: CHOLMOD's count
+         * for the factor against two triangular solves and a product). */
+        double step = 4 * su->common.lnz + 4.0 * ((int *)su->matrix->p)[n];
+        double ratio = step > 0 ? su->common.fl / step : 0;
+        int max_steps = ratio < PCG_MIN_STEPS ? PCG_MIN_STEPS : ratio > PCG_MAX_STEPS ? PCG_MAX_STEPS : (int)ratio;
+        su->max_steps = sv->max_steps = max_steps;
+        sv->matrix = cholmod_copy_sparse(su->matrix, &sv->common);
+    }
+    if (su->factor && sv->matrix)
+        sv->factor = cholmod_copy_factor(su->factor, &sv->common);
+    for (int k = 0; k < 2 && sv->factor; ++k) {
+        coordinate_solver *s = &system->solver[k];
+        s->backoff = 1;
+        s->rhs = cholmod_zeros(n, 1, CHOLMOD_REAL, &s->common);
+        s->residual = cholmod_zeros(n, 1, CHOLMOD_REAL, &s->common);
+        s->direction = malloc((size_t)n * sizeof(double) + 1);
+        s->product = malloc((size_t)n * sizeof(double) + 1);
+        s->current = malloc((size_t)n * sizeof(double) + 1);
+        if (!s->rhs || !s->residual || !s->direction || !s->product || !s->current)
+            break;
+    }
+    if (!su->current || !sv->current) {
+        snprintf(message, message_size, "textile: panel %d: out of memory in the symbolic analysis", panel);
+        return PZ_ERR_NOMEM;
+    }
+    return PZ_OK;
+}
+
+static double dot3(const double a[3], const double b[3])
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* The 3D frame coordinates of every face in every pose used, and rest areas. */
+static void compute_frames(textile_state *state)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    int32_t poses = state->pose_total;
+#pragma omp parallel for schedule(static) num_threads(state->threads) if (state->parallel)
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double e1[3], e2[3];
+        for (int32_t p = 0; p < poses; ++p) {
+            const double *pos = p == 0 ? mesh->positions : mesh->poses + (size_t)(p - 1) * mesh->vertex_count * 3;
+            double area = pz_param_face_frame(pos, mesh->faces + 3 * f, state->frames + ((size_t)f * poses + p) * 3,
+                                              e1, e2);
+            if (p == 0) {
+                state->areas[f] = area;
+                state->grain_local[2 * f] = dot3(state->grain, e1);
+                state->grain_local[2 * f + 1] = dot3(state->grain, e2);
+            }
+        }
+    }
+}
+
+/* Every vertex in one panel only (the panels' systems index their own
+ * vertices and are built in parallel) and no panel empty. */
+static pz_status check_panels(const pz_pattern *pattern, pz_ctx *ctx)
+{
+    const pz_mesh *mesh = pattern->mesh;
+    int32_t *vertex_panel = malloc((size_t)mesh->vertex_count * sizeof(int32_t) + 1);
+    int32_t *panel_faces = calloc((size_t)pattern->panel_count + 1, sizeof(int32_t));
+    pz_status status = PZ_OK;
+    if (!vertex_panel || !panel_faces)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+    for (int32_t v = 0; !status && v < mesh->vertex_count; ++v)
+        vertex_panel[v] = -1;
+    for (int32_t i = 0; !status && i < 3 * mesh->face_count; ++i) {
+        int32_t v = mesh->faces[i], panel = pattern->face_panel[i / 3];
+        if (panel < 0 || panel >= pattern->panel_count || v < 0 || v >= mesh->vertex_count) {
+            status = pz_error(ctx, PZ_ERR_DATA, "textile: face %d: panel or vertex out of range", i / 3);
+        } else if (vertex_panel[v] >= 0 && vertex_panel[v] != panel) {
+            status = pz_error(ctx, PZ_ERR_DATA, "textile: vertex %d is in panels %d and %d (the mesh is not cut)", v,
+                              vertex_panel[v], panel);
+        } else {
+            vertex_panel[v] = panel;
+            panel_faces[panel] += i % 3 == 0;
+        }
+    }
+    for (int32_t p = 0; !status && p < pattern->panel_count; ++p)
+        if (panel_faces[p] == 0)
+            status = pz_error(ctx, PZ_ERR_DATA, "textile: panel %d has no faces", p);
+    free(vertex_panel);
+    free(panel_faces);
+    return status;
+}
+
+static pz_status check_correspondences(const pz_pattern *pattern, pz_ctx *ctx)
+{
+    int32_t nv = pattern->mesh->vertex_count;
+    for (int32_t s = 0; s < pattern->seam_count; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        for (int32_t i = 0; i < seam->pair_count; ++i)
+            if (seam->side_a[i] < 0 || seam->side_a[i] >= nv || seam->side_b[i] < 0 || seam->side_b[i] >= nv)
+                return pz_error(ctx, PZ_ERR_DATA, "textile: seam %d: vertex out of range", s);
+    }
+    for (int32_t d = 0; d < pattern->dart_count; ++d) {
+        const pz_dart *dart = &pattern->darts[d];
+        if (dart->tip < 0 || dart->tip >= nv)
+            return pz_error(ctx, PZ_ERR_DATA, "textile: dart %d: tip out of range", d);
+        for (int32_t i = 0; i < dart->pair_count; ++i)
+            if (dart->leg_a[i] < 0 || dart->leg_a[i] >= nv || dart->leg_b[i] < 0 || dart->leg_b[i] >= nv)
+                return pz_error(ctx, PZ_ERR_DATA, "textile: dart %d: vertex out of range", d);
+    }
+    return PZ_OK;
+}
+
+static pz_status state_setup(textile_state *state, pz_ctx *ctx)
+{
+    const pz_pattern *pattern = state->pattern;
+    const pz_mesh *mesh = pattern->mesh;
+    size_t nv = (size_t)mesh->vertex_count, nf = (size_t)mesh->face_count;
+    state->frames = malloc(nf * state->pose_total * 3 * sizeof(double) + 1);
+    state->areas = malloc(nf * sizeof(double) + 1);
+    state->grain_local = malloc(nf * 2 * sizeof(double) + 1);
+    state->terms = malloc(nf * sizeof(face_terms) + 1);
+    state->vertex_local = malloc(nv * sizeof(int32_t) + 1);
+    state->pull_weight = malloc(nv * sizeof(double) + 1);
+    state->pull_target = malloc(nv * 2 * sizeof(double) + 1);
+    state->panels = calloc((size_t)pattern->panel_count + 1, sizeof(panel_system));
+    if (!state->frames || !state->areas || !state->grain_local || !state->terms || !state->vertex_local || !state->pull_weight ||
+        !state->pull_target || !state->panels)
+        return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+    for (size_t v = 0; v < nv; ++v)
+        state->vertex_local[v] = -1;
+    compute_frames(state);
+    pz_status failed = PZ_OK;
+    char message[sizeof ctx->error] = "";
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+    for (int32_t p = 0; p < pattern->panel_count; ++p) {
+        char local_message[sizeof ctx->error];
+        pz_status st = panel_setup(state, p, local_message, sizeof local_message);
+        if (st) {
+#pragma omp critical(pz_textile_failure)
+            if (!failed) {
+                failed = st;
+                memcpy(message, local_message, sizeof message);
+            }
+        }
+    }
+    if (failed)
+        return pz_error(ctx, failed, "%s", message);
+    return PZ_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Local step                                                                */
+/* ------------------------------------------------------------------------ */
+
+/* Stretch coefficients, targets and rigid edge targets of face f; returns its
+ * energy at the current uv. */
+static double local_face(const textile_state *state, int32_t f, const double *uv)
+{
+    const int32_t *face = state->pattern->mesh->faces + 3 * f;
+    face_terms *terms = &state->terms[f];
+    double q[3][2];
+    for (int i = 0; i < 3; ++i) {
+        q[i][0] = uv[2 * face[i]];
+        q[i][1] = uv[2 * face[i] + 1];
+    }
+    double twice_area = (q[1][0] - q[0][0]) * (q[2][1] - q[0][1]) - (q[1][1] - q[0][1]) * (q[2][0] - q[0][0]);
+    double area_3d = state->areas[f];
+    /* A collapsed 2D triangle has no barycentric gradients, and a flipped
+     * one would be held mirrored by its stretch rows (c . u = 1 whatever the
+     * orientation): their stretch rows are dropped for this iteration and the
+     * rotation-only rigidity term alone turns them back. */
+    int stretch = twice_area > 1e-12 * area_3d && area_3d > 0;
+    for (int i = 0; i < 3; ++i) {
+        int j = (i + 1) % 3, k = (i + 2) % 3;
+        terms->c[0][i] = stretch ? (q[j][1] - q[k][1]) / twice_area : 0;
+        terms->c[1][i] = stretch ? (q[k][0] - q[j][0]) / twice_area : 0;
+    }
+    double qe[3][2];
+    for (int e = 0; e < 3; ++e) {
+        int j = (e + 1) % 3;
+        qe[e][0] = q[j][0] - q[e][0];
+        qe[e][1] = q[j][1] - q[e][1];
+    }
+    double s[2] = {0, 0}, t[3][2] = {{0, 0}, {0, 0}, {0, 0}};
+    int32_t poses = state->pose_total;
+    for (int32_t p = 0; p < poses; ++p) {
+        const double *frame = state->frames + ((size_t)f * poses + p) * 3;
+        double P[3][2] = {{0, 0}, {frame[0], 0}, {frame[1], frame[2]}};
+        for (int k = 0; k < 2; ++k) {
+            double gx = 0, gy = 0;
+            for (int i = 0; i < 3; ++i) {
+                gx += terms->c[k][i] * P[i][0];
+                gy += terms->c[k][i] * P[i][1];
+            }
+            s[k] += sqrt(gx * gx + gy * gy);
+        }
+        double pe[3][2], s00 = 0, s01 = 0, s10 = 0, s11 = 0;
+        for (int e = 0; e < 3; ++e) {
+            int j = (e + 1) % 3;
+            pe[e][0] = P[j][0] - P[e][0];
+            pe[e][1] = P[j][1] - P[e][1];
+            s00 += qe[e][0] * pe[e][0];
+            s01 += qe[e][0] * pe[e][1];
+            s10 += qe[e][1] * pe[e][0];
+            s11 += qe[e][1] * pe[e][1];
+        }
+        /* The rotation maximizing tr(R^T S), S = sum q_e p_e^T. */
+        double cs = s00 + s11, sn = s10 - s01, norm = sqrt(cs * cs + sn * sn);
+        if (norm > 0) {
+            cs /= norm;
+            sn /= norm;
+        } else {
+            cs = 1;
+            sn = 0;
+        }
+        for (int e = 0; e < 3; ++e) {
+            t[e][0] += cs * pe[e][0] - sn * pe[e][1];
+            t[e][1] += sn * pe[e][0] + cs * pe[e][1];
+        }
+    }
+    double energy = 0, stretch_weight = state->w_stretch * area_3d;
+    for (int k = 0; k < 2; ++k) {
+        terms->s[k] = s[k] / poses;
+        if (stretch) {
+            double image = 0;
+            for (int i = 0; i < 3; ++i)
+                image += terms->c[k][i] * q[i][k];
+            energy += stretch_weight * (terms->s[k] - image) * (terms->s[k] - image);
+        }
+    }
+    for (int e = 0; e < 3; ++e)
+        for (int k = 0; k < 2; ++k) {
+            terms->t[e][k] = t[e][k] / poses;
+            double r = qe[e][k] - terms->t[e][k];
+            energy += state->w_rigid * r * r;
+        }
+    return energy;
+}
+
+/* Adds weight * |x - target|^2 for one vertex; returns the energy. */
+static double pull(textile_state *state, int32_t v, double weight, const double target[2], const double *uv)
+{
+    state->pull_weight[v] += weight;
+    state->pull_target[2 * v] += weight * target[0];
+    state->pull_target[2 * v + 1] += weight * target[1];
+    double du = uv[2 * v] - target[0], dv = uv[2 * v + 1] - target[1];
+    return weight * (du * du + dv * dv);
+}
+
+/* Eqs. 7-8: best-fit reflection x -> R x + t (R symmetric, det -1) of side a
+ * onto side b, midpoint targets for both sides. */
+static double seam_targets(textile_state *state, const pz_seam *seam, const double *uv)
+{
+    int32_t n = seam->pair_count;
+    if (n < 2 || state->w_seam <= 0)
+        return 0;
+    double ca[2] = {0, 0}, cb[2] = {0, 0};
+    for (int32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 2; ++k) {
+            ca[k] += uv[2 * seam->side_a[i] + k] / n;
+            cb[k] += uv[2 * seam->side_b[i] + k] / n;
+        }
+    double s00 = 0, s01 = 0, s10 = 0, s11 = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        double px = uv[2 * seam->side_a[i]] - ca[0], py = uv[2 * seam->side_a[i] + 1] - ca[1];
+        double qx = uv[2 * seam->side_b[i]] - cb[0], qy = uv[2 * seam->side_b[i] + 1] - cb[1];
+        s00 += qx * px;
+        s01 += qx * py;
+        s10 += qy * px;
+        s11 += qy * py;
+    }
+    /* R = [[c, s], [s, -c]] maximizes c (S00 - S11) + s (S01 + S10). */
+    double c = s00 - s11, s = s01 + s10, norm = sqrt(c * c + s * s);
+    if (norm > 0) {
+        c /= norm;
+        s /= norm;
+    } else {
+        c = 1;
+        s = 0;
+    }
+    double t[2] = {cb[0] - (c * ca[0] + s * ca[1]), cb[1] - (s * ca[0] - c * ca[1])};
+    double energy = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        const double *p = uv + 2 * seam->side_a[i], *q = uv + 2 * seam->side_b[i];
+        double mp[2] = {c * p[0] + s * p[1] + t[0], s * p[0] - c * p[1] + t[1]};
+        double qt[2] = {q[0] - t[0], q[1] - t[1]};
+        double mq[2] = {c * qt[0] + s * qt[1], s * qt[0] - c * qt[1]}; /* M^-1 q = R (q - t) */
+        double target_a[2] = {(p[0] + mq[0]) / 2, (p[1] + mq[1]) / 2};
+        double target_b[2] = {(q[0] + mp[0]) / 2, (q[1] + mp[1]) / 2};
+        energy += pull(state, seam->side_a[i], state->w_seam, target_a, uv);
+        energy += pull(state, seam->side_b[i], state->w_seam, target_b, uv);
+    }
+    return energy;
+}
+
+/* Eq. 9: axis through the tip fitting the leg midpoints; targets average each
+ * leg point with its partner mirrored about that axis. */
+static double dart_targets(textile_state *state, const pz_dart *dart, const double *uv)
+{
+    int32_t n = dart->pair_count;
+    if (n < 1 || state->w_dart <= 0)
+        return 0;
+    const double *tip = uv + 2 * dart->tip;
+    double c00 = 0, c01 = 0, c11 = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        const double *p = uv + 2 * dart->leg_a[i], *q = uv + 2 * dart->leg_b[i];
+        double rx = (p[0] + q[0]) / 2 - tip[0], ry = (p[1] + q[1]) / 2 - tip[1];
+        c00 += rx * rx;
+        c01 += rx * ry;
+        c11 += ry * ry;
+    }
+    if (c00 + c11 <= 0)
+        return 0;
+    double angle = 0.5 * atan2(2 * c01, c00 - c11); /* principal direction */
+    double dx = cos(angle), dy = sin(angle);
+    double m00 = 2 * dx * dx - 1, m01 = 2 * dx * dy, m11 = 2 * dy * dy - 1;
+    double energy = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        const double *p = uv + 2 * dart->leg_a[i], *q = uv + 2 * dart->leg_b[i];
+        double px = p[0] - tip[0], py = p[1] - tip[1], qx = q[0] - tip[0], qy = q[1] - tip[1];
+        double mirrored_p[2] = {tip[0] + m00 * px + m01 * py, tip[1] + m01 * px + m11 * py};
+        double mirrored_q[2] = {tip[0] + m00 * qx + m01 * qy, tip[1] + m01 * qx + m11 * qy};
+        double target_a[2] = {(p[0] + mirrored_q[0]) / 2, (p[1] + mirrored_q[1]) / 2};
+        double target_b[2] = {(q[0] + mirrored_p[0]) / 2, (q[1] + mirrored_p[1]) / 2};
+        energy += pull(state, dart->leg_a[i], state->w_dart, target_a, uv);
+        energy += pull(state, dart->leg_b[i], state->w_dart, target_b, uv);
+    }
+    return energy;
+}
+
+/* The whole local step; returns E_textile (Eq. 10) at the current uv. */
+static double local_step(textile_state *state, const double *uv)
+{
+    const pz_pattern *pattern = state->pattern;
+    int32_t nf = pattern->mesh->face_count;
+    double energy = 0;
+#pragma omp parallel for schedule(static) reduction(+ : energy) num_threads(state->threads) if (state->parallel)
+    for (int32_t f = 0; f < nf; ++f)
+        energy += local_face(state, f, uv);
+    /* Seams and darts touch few vertices: serial. */
+    memset(state->pull_weight, 0, (size_t)pattern->mesh->vertex_count * sizeof(double));
+    memset(state->pull_target, 0, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+    for (int32_t s = 0; s < pattern->seam_count; ++s)
+        energy += seam_targets(state, &pattern->seams[s], uv);
+    for (int32_t d = 0; d < pattern->dart_count; ++d)
+        energy += dart_targets(state, &pattern->darts[d], uv);
+    return energy;
+}
+
+/*
+ * The angle that turns panel p's area-weighted projected grain onto +v: the
+ * computation of pz_param_grain_angle (lscm.c) with the rest frames and the
+ * grain in each frame precomputed at setup.
+ */
+static double panel_grain_angle(const textile_state *state, int32_t panel, const double *uv)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    double glen = sqrt(dot3(state->grain, state->grain));
+    double sum[2] = {0, 0}, area_sum = 0;
+    for (int32_t i = state->offsets[panel]; i < state->offsets[panel + 1]; ++i) {
+        int32_t f = state->order[i];
+        const int32_t *face = mesh->faces + 3 * f;
+        const double *frame = state->frames + (size_t)f * state->pose_total * 3;
+        double area = state->areas[f];
+        if (area <= 0)
+            continue;
+        area_sum += area;
+        double a = state->grain_local[2 * f] / glen, b = state->grain_local[2 * f + 1] / glen;
+        double projected = sqrt(a * a + b * b);
+        if (projected < 1e-9)
+            continue;
+        const double *q0 = uv + 2 * face[0], *q1 = uv + 2 * face[1], *q2 = uv + 2 * face[2];
+        double t = b / frame[2];
+        double s = (a - frame[1] * t) / frame[0];
+        double dx = (q1[0] - q0[0]) * s + (q2[0] - q0[0]) * t, dy = (q1[1] - q0[1]) * s + (q2[1] - q0[1]) * t;
+        double dlen = sqrt(dx * dx + dy * dy);
+        if (!(dlen > 0))
+            continue;
+        sum[0] += area * projected * dx / dlen;
+        sum[1] += area * projected * dy / dlen;
+    }
+    if (!(sqrt(sum[0] * sum[0] + sum[1] * sum[1]) > 1e-3 * area_sum))
+        return 0;
+    return 1.57079632679489661923 - atan2(sum[1], sum[0]);
+}
+
+/* Step 1: rigid rotation of every panel so its warp follows the grain. */
+static void align_grain(textile_state *state, double *uv)
+{
+    const pz_pattern *pattern = state->pattern;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+    for (int32_t p = 0; p < pattern->panel_count; ++p) {
+        double angle = panel_grain_angle(state, p, uv);
+        pz_param_rotate_vertices(state->panels[p].vertices, state->panels[p].vertex_count, angle, uv);
+    }
+}
+
+/* ------------------------------------------------------------------------ */
+/* Global step                                                               */
+/* ------------------------------------------------------------------------ */
+
+/* y = A x for the upper-stored symmetric matrix. */
+static void symmetric_product(const cholmod_sparse *matrix, const double *x, double *y)
+{
+    const int *colp = matrix->p, *rows = matrix->i;
+    const double *values = matrix->x;
+    size_t n = matrix->ncol;
+    memset(y, 0, n * sizeof(double));
+    for (size_t j = 0; j < n; ++j) {
+        double xj = x[j], sum = 0;
+        int end = colp[j + 1] - 1; /* the diagonal */
+        for (int e = colp[j]; e < end; ++e) {
+            y[rows[e]] += values[e] * xj;
+            sum += values[e] * x[rows[e]];
+        }
+        y[j] += sum + values[end] * xj;
+    }
+}
+
+/* Numeric factorization of the current matrix, then a direct solve. */
+static int direct_solve(panel_system *system, coordinate_solver *solver, int k, double *uv)
+{
+    cholmod_factorize(solver->matrix, solver->factor, &solver->common);
+    if (solver->common.status != CHOLMOD_OK)
+        return solver->common.status ? solver->common.status : -1;
+    solver->factored = 1;
+    solver->refactor = 0;
+    if (!cholmod_solve2(CHOLMOD_A, solver->factor, solver->rhs, NULL, &solver->solution, NULL, &solver->work_y,
+                        &solver->work_e, &solver->common))
+        return solver->common.status ? solver->common.status : -1;
+    const double *x = solver->solution->x;
+    for (int32_t l = 0; l < system->vertex_count; ++l)
+        uv[2 * system->vertices[l] + k] = x[l];
+    return CHOLMOD_OK;
+}
+
+/*
+ * Conjugate gradients preconditioned with the factor of an earlier
+ * iteration's matrix, warm-started at the current coordinates. The matrix
+ * changes only through the stretch coefficients, which settle as the
+ * iteration converges, so the old factor is a near-exact inverse and a few
+ * steps reach 1e-8 relative residual at the price of triangular solves
+ * instead of a factorization. The step budget is what one factorization
+ * costs in PCG steps (flop counts, from about 7 at 1K vertices to 65 at
+ * 100K; clamped to 4..60): it returns 0 (uv untouched) when it needs more,
+ * and asks for a refactorization when it needed more than half of it (the
+ * factor has gone stale). When the matrix keeps changing too much (large,
+ * uneven distortion: the face scan), PCG failures back off exponentially
+ * (1, 2, 4, ... direct solves before the next try), so a failing PCG costs
+ * at most about as much as the factorizations it was meant to save.
+ */
+#define PCG_TOLERANCE 1e-8
+static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, double *uv)
+{
+    int32_t n = system->vertex_count;
+    double *b = solver->rhs->x, *r = solver->residual->x, *p = solver->direction, *ap = solver->product;
+    /* The iterate lives in uv's column k; gather it into `current`. */
+    double *current = solver->current;
+    for (int32_t l = 0; l < n; ++l)
+        current[l] = uv[2 * system->vertices[l] + k];
+    symmetric_product(solver->matrix, current, ap);
+    double b_norm = 0, r_norm = 0;
+    for (int32_t l = 0; l < n; ++l) {
+        r[l] = b[l] - ap[l];
+        b_norm += b[l] * b[l];
+        r_norm += r[l] * r[l];
+    }
+    double goal = PCG_TOLERANCE * PCG_TOLERANCE * fmax(b_norm, 1e-300);
+    double rz = 0;
+    int steps = 0, ok = r_norm <= goal;
+    while (!ok && steps < solver->max_steps) {
+        if (!cholmod_solve2(CHOLMOD_A, solver->factor, solver->residual, NULL, &solver->solution, NULL,
+                            &solver->work_y, &solver->work_e, &solver->common))
+            break;
+        const double *z = solver->solution->x;
+        double rz_new = 0;
+        for (int32_t l = 0; l < n; ++l)
+            rz_new += r[l] * z[l];
+        double beta = steps ? rz_new / rz : 0;
+        rz = rz_new;
+        for (int32_t l = 0; l < n; ++l)
+            p[l] = z[l] + beta * p[l];
+        symmetric_product(solver->matrix, p, ap);
+        double pap = 0;
+        for (int32_t l = 0; l < n; ++l)
+            pap += p[l] * ap[l];
+        if (!(pap > 0))
+            break;
+        double alpha = rz / pap;
+        r_norm = 0;
+        for (int32_t l = 0; l < n; ++l) {
+            current[l] += alpha * p[l];
+            r[l] -= alpha * ap[l];
+            r_norm += r[l] * r[l];
+        }
+        ++steps;
+        ok = r_norm <= goal;
+    }
+    if (ok)
+        for (int32_t l = 0; l < n; ++l)
+            uv[2 * system->vertices[l] + k] = current[l];
+    if (steps > solver->max_steps / 2)
+        solver->refactor = 1;
+    return ok;
+}
+
+/* Assembles, refactorizes (when needed) and solves coordinate k of one panel; writes the
+ * new coordinate into uv. Returns a CHOLMOD status (CHOLMOD_OK = 0). */
+static int solve_coordinate(const textile_state *state, int32_t panel, int k, double *uv)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    panel_system *system = &state->panels[panel];
+    coordinate_solver *solver = &system->solver[k];
+    cholmod_sparse *matrix = solver->matrix;
+    double *values = matrix->x, *rhs = solver->rhs->x;
+    const int *colp = matrix->p;
+    int32_t n = system->vertex_count;
+    memset(values, 0, (size_t)colp[n] * sizeof(double));
+    memset(rhs, 0, (size_t)n * sizeof(double));
+    const int32_t *faces = state->order + state->offsets[panel];
+    int32_t count = state->offsets[panel + 1] - state->offsets[panel];
+    static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    double w_rigid = state->w_rigid;
+    for (int32_t i = 0; i < count; ++i) {
+        int32_t f = faces[i];
+        const int32_t *face = mesh->faces + 3 * f;
+        const face_terms *terms = &state->terms[f];
+        const double *c = terms->c[k];
+        double w = state->w_stretch * state->areas[f];
+        const int32_t *slot = system->slots + 6 * i;
+        int32_t local[3] = {state->vertex_local[face[0]], state->vertex_local[face[1]],
+                            state->vertex_local[face[2]]};
+        for (int e = 0; e < 6; ++e) {
+            int a = pair[e][0], b = pair[e][1];
+            values[slot[e]] += w * c[a] * c[b] + (a == b ? 2 * w_rigid : -w_rigid);
+        }
+        for (int a = 0; a < 3; ++a)
+            rhs[local[a]] += w * terms->s[k] * c[a];
+        for (int e = 0; e < 3; ++e) {
+            double t = w_rigid * terms->t[e][k];
+            rhs[local[(e + 1) % 3]] += t;
+            rhs[local[e]] -= t;
+        }
+    }
+    double reg = state->regularization;
+    for (int32_t l = 0; l < n; ++l) {
+        int32_t v = system->vertices[l];
+        values[colp[l + 1] - 1] += state->pull_weight[v] + reg; /* the diagonal ends each upper column */
+        rhs[l] += state->pull_target[2 * v + k] + reg * uv[2 * v + k];
+    }
+    if (solver->direct_runs > 0) {
+        --solver->direct_runs;
+        return direct_solve(system, solver, k, uv);
+    }
+    if (solver->refactor || !solver->factored)
+        return direct_solve(system, solver, k, uv);
+    if (pcg_solve(system, solver, k, uv)) {
+        solver->backoff = 1;
+        return CHOLMOD_OK;
+    }
+    solver->direct_runs = solver->backoff;
+    solver->backoff = solver->backoff < 16 ? 2 * solver->backoff : 16;
+    return direct_solve(system, solver, k, uv);
+}
+
+static pz_status global_step(textile_state *state, double *uv, pz_ctx *ctx)
+{
+    int32_t tasks = 2 * state->pattern->panel_count;
+    int failed_status = CHOLMOD_OK;
+    int32_t failed_panel = -1;
+    /* The local step is complete before any coordinate is overwritten, and
+     * each task writes only its own panel's coordinate: no races on uv. */
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+    for (int32_t task = 0; task < tasks; ++task) {
+        int st = solve_coordinate(state, task / 2, task % 2, uv);
+        if (st != CHOLMOD_OK) {
+#pragma omp critical(pz_textile_failure)
+            if (failed_panel < 0) {
+                failed_panel = task / 2;
+                failed_status = st;
+            }
+        }
+    }
+    if (failed_panel < 0)
+        return PZ_OK;
+    if (failed_status == CHOLMOD_OUT_OF_MEMORY)
+        return pz_error(ctx, PZ_ERR_NOMEM, "textile: panel %d: out of memory", failed_panel);
+    return pz_error(ctx, PZ_ERR_INTERNAL, "textile: panel %d: the global step failed (CHOLMOD status %d)", failed_panel,
+                    failed_status);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Driver                                                                    */
+/* ------------------------------------------------------------------------ */
+
+static void read_options(textile_state *state, const pz_textile_options *options, int *iterations, double *tolerance)
+{
+    pz_textile_options defaults;
+    memset(&defaults, 0, sizeof defaults);
+    if (!options)
+        options = &defaults;
+    *iterations = options->iterations > 0 ? options->iterations : 20;
+    *tolerance = options->tolerance > 0 ? options->tolerance : 1e-6;
+    if (options->weights_given) {
+        state->w_stretch = options->weight_stretch;
+        state->w_rigid = options->weight_rigid;
+        state->w_dart = options->weight_dart;
+        state->w_seam = options->weight_seam;
+    } else {
+        state->w_stretch = 5;
+        state->w_rigid = 1;
+        state->w_dart = 5;
+        state->w_seam = 5;
+    }
+    double up[3] = {0, 0, 1};
+    memcpy(state->grain, options->grain_given ? options->grain : up, sizeof state->grain);
+    state->threads = options->threads > 0 ? options->threads : omp_get_max_threads();
+    state->parallel = state->threads > 1 && state->pattern->mesh->face_count >= PARALLEL_MIN_FACES;
+    state->pose_total = 1 + (options->use_poses ? state->pattern->mesh->pose_count : 0);
+    state->regularization = 1e-8 * fmax(1.0, state->w_stretch + state->w_rigid);
+}
+
+pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *options, double *uv,
+                           pz_textile_result *result, pz_ctx *ctx)
+{
+    if (!pattern || !pattern->mesh || !uv)
+        return pz_error(ctx, PZ_ERR_USAGE, "textile: no pattern or no output");
+    textile_state state;
+    memset(&state, 0, sizeof state);
+    state.pattern = pattern;
+    int iterations;
+    double tolerance;
+    read_options(&state, options, &iterations, &tolerance);
+    if (state.w_stretch < 0 || state.w_rigid < 0 || state.w_dart < 0 || state.w_seam < 0)
+        return pz_error(ctx, PZ_ERR_USAGE, "textile: weights must not be negative");
+    pz_textile_result outcome;
+    memset(&outcome, 0, sizeof outcome);
+    double start = pz_seconds();
+    pz_status status = check_panels(pattern, ctx);
+    if (!status)
+        status = check_correspondences(pattern, ctx);
+    if (!status)
+        status = pz_param_lscm_pattern(pattern, state.grain, uv, ctx);
+    if (!status)
+        status = pz_param_panel_faces(pattern, &state.offsets, &state.order, ctx);
+    if (!status)
+        status = state_setup(&state, ctx);
+    if (status) {
+        state_free(&state);
+        return status;
+    }
+    double solve_start = pz_seconds();
+    outcome.init_ms = 1e3 * (solve_start - start);
+    double previous = 0;
+    for (int it = 0;; ++it) {
+        align_grain(&state, uv);
+        double energy = local_step(&state, uv);
+        if (it == 0)
+            outcome.initial_energy = energy;
+        outcome.final_energy = energy;
+        if (it > 0 && fabs(energy - previous) <= tolerance * previous) {
+            outcome.converged = 1;
+            break;
+        }
+        if (it == iterations)
+            break;
+        previous = energy;
+        if ((status = global_step(&state, uv, ctx))) {
+            state_free(&state);
+            return status;
+        }
+        outcome.iterations_run = it + 1;
+    }
+    double end = pz_seconds();
+    outcome.solve_ms = 1e3 * (end - solve_start);
+    outcome.iteration_ms = outcome.iterations_run ? outcome.solve_ms / outcome.iterations_run : 0;
+    pz_param_layout(pattern, state.offsets, state.order, uv);
+    state_free(&state);
+    if (result)
+        *result = outcome;
+    return PZ_OK;
+}

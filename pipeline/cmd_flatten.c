@@ -1,0 +1,853 @@
+/*
+ * pipeline/cmd_flatten.c -- `panelize flatten MESH... -o DIR`: cut a garment
+ * into its panels, flatten every panel and write garment.obj (the garment
+ * with the pattern as vt), pattern.svg (the pieces at 1:1) and report.json
+ * (the metrics). docs/flatten.md describes inputs, outputs and the report.
+ *
+ * Steps (each timed for report.json):
+ *  1. read: one MESH (with --pose files), or several panel files
+ *     concatenated without welding (panel K = file K); millimetres; the
+ *     mesh is prepared and validated like every command's input. Vertex ids
+ *     of the input files are kept through a map (raw id -> prepared id), since
+ *     preparation drops unreferenced vertices.
+ *  2. pattern: panels from --panels FILE, --panels uv (the input's UV islands
+ *     and UV seams, pz_pattern_panels_from_uv), the input files, or else the
+ *     groups split into connected components; --seams/--darts files become
+ *     pz_correspondences in garment vertex ids; pz_pattern_build cuts the
+ *     garment (and cuts non-disk panels into disks).
+ *  3. flatten: pz_param_textile (pietroni2022 Sec. 4.3) or, with
+ *     --backend lscm, pz_param_lscm_pattern (Levy 2002), then a shelf layout
+ *     when pieces overlap.
+ *  4. metrics: pz_metrics_compute on the rest pose and on every extra pose;
+ *     strain figures in the report are the worst over the poses.
+ *  5. write: DIR is created (mkdir -p); the three files are written to
+ *     temporaries and renamed only when all three are complete. If anything
+ *     fails, the files renamed so far and the directories created are removed
+ *     again, so a failed run leaves nothing (all or nothing).
+ *
+ * Every option is checked before any file is read (exit 64); data problems
+ * are exit 65 naming the file (and line); nothing is written on any error.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "pipeline/pattern_output.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+const char pz_cli_flatten_usage[] =
+    "usage: panelize flatten MESH... -o DIR [--panels FILE|uv] [--seams FILE]...\n"
+    "           [--darts [K:]FILE]... [--grain X,Y,Z] [--pose FILE]...\n"
+    "           [--backend textile|lscm] [--iterations N] [--weights S,R,D,M]\n"
+    "           [--fabric KSU,KSV,KR] [--units U] [--repair] [--json] [--quiet]\n"
+    "\n"
+    "Flattens every panel of a garment into a sewing pattern and writes, into DIR\n"
+    "(created when missing):\n"
+    "  garment.obj   the input's vertices and faces unchanged, vt = the pattern (mm),\n"
+    "                one group panel_K per panel\n"
+    "  pattern.svg   the pieces at 1:1 in millimetres with outlines and grainlines\n"
+    "  report.json   strain, shear, energies, seam and dart figures per panel\n"
+    "\n"
+    "Panels: a disk mesh is one panel; OBJ groups and connected components are\n"
+    "panels; several MESH files are concatenated, panel K = file K. A panel that\n"
+    "is not a disk is cut into one.\n"
+    "\n"
+    "options:\n"
+    "  -o DIR               the output directory (required)\n"
+    "  --panels FILE        a panel id per face, one integer per line\n"
+    "  --panels uv          panels and cuts from the input's own UVs (vt)\n"
+    "  --seams FILE         a seam: panel A, panel B, then `a b` vertex pairs\n"
+    "                       (repeatable)\n"
+    "  --darts [K:]FILE     a dart of panel K: tip vertex, then `p q` pairs; K\n"
+    "                       defaults to the K of a file named patch_K_dart_J\n"
+    "                       (repeatable)\n"
+    "  --grain X,Y,Z        the 3D direction of the warp (default 0,0,1)\n"
+    "  --pose FILE          an extra pose (repeatable; one MESH only)\n"
+    "  --backend B          textile (default) or lscm\n"
+    "  --iterations N       textile iterations, 1..10000 (default 20)\n"
+    "  --weights S,R,D,M    stretch, rigidity, dart and seam weights\n"
+    "                       (default 5,1,5,5)\n"
+    "  --fabric KSU,KSV,KR  weft (u) and warp (v) tensile stiffness (N/mm) and shear\n"
+    "                       stiffness (N/mm/rad) for the orthotropic energy\n"
+    "                       (default 0.946,0.548,0.159)\n"
+    "  --units U            the input's units: mm, cm, m or auto (default)\n"
+    "  --repair             repair the mesh before validating (see panelize check)\n"
+    "  --json               print report.json on stdout\n"
+    "  --quiet              nothing on stderr but an error\n"
+    "\n"
+    "See docs/flatten.md.\n";
+
+#define DEFAULT_ITERATIONS 20
+#define MAX_ITERATIONS 10000
+/* Space between pieces when they have to be laid out again (mm). */
+#define LAYOUT_GAP_MM 20.0
+
+enum timing { TIME_READ, TIME_PATTERN, TIME_FLATTEN, TIME_METRICS, TIME_WRITE, TIME_TOTAL };
+
+/* ---------------------------------------------------------------- options */
+
+typedef struct flatten_settings {
+    int lscm;                 /* --backend lscm */
+    int iterations;
+    int weights_given;
+    double weights[4];        /* stretch, rigid, dart, seam */
+    pz_fabric fabric;
+    int grain_given;
+    double grain[3];
+} flatten_settings;
+
+/* Exactly `count` comma-separated finite numbers. */
+static pz_status parse_numbers(const char *option, const char *text, double *values, int count, pz_ctx *ctx)
+{
+    const char *cursor = text;
+    for (int i = 0; i < count; ++i) {
+        char *end = NULL;
+        errno = 0;
+        values[i] = strtod(cursor, &end);
+        int separator_ok = i + 1 < count ? *end == ',' : *end == '\0';
+        if (end == cursor || errno == ERANGE || !isfinite(values[i]) || !separator_ok)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: %s: '%s' is not %d finite numbers separated by commas",
+                            option, text, count);
+        cursor = end + 1;
+    }
+    return PZ_OK;
+}
+
+static pz_status parse_settings(const pz_cli_args *args, flatten_settings *settings, pz_ctx *ctx)
+{
+    memset(settings, 0, sizeof *settings);
+    settings->iterations = DEFAULT_ITERATIONS;
+    settings->weights[0] = 5, settings->weights[1] = 1, settings->weights[2] = 5, settings->weights[3] = 5;
+    settings->fabric = (pz_fabric){0.946, 0.548, 0.159};
+    settings->grain[2] = 1;
+    const char *text;
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_BACKEND))) {
+        if (strcmp(text, "lscm") != 0 && strcmp(text, "textile") != 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --backend: '%s' is not textile or lscm", text);
+        settings->lscm = strcmp(text, "lscm") == 0;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_ITERATIONS))) {
+        char *end = NULL;
+        errno = 0;
+        long iterations = strtol(text, &end, 10);
+        if (end == text || *end || errno == ERANGE || iterations < 1 || iterations > MAX_ITERATIONS)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --iterations: '%s' is not a whole number in 1..%d", text,
+                            MAX_ITERATIONS);
+        settings->iterations = (int)iterations;
+    }
+    pz_status status;
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_WEIGHTS))) {
+        if ((status = parse_numbers("--weights", text, settings->weights, 4, ctx)))
+            return status;
+        for (int i = 0; i < 4; ++i)
+            if (settings->weights[i] < 0)
+                return pz_error(ctx, PZ_ERR_USAGE, "flatten: --weights: '%s': weights must not be negative", text);
+        settings->weights_given = 1;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_FABRIC))) {
+        double fabric[3];
+        if ((status = parse_numbers("--fabric", text, fabric, 3, ctx)))
+            return status;
+        for (int i = 0; i < 3; ++i)
+            if (fabric[i] <= 0)
+                return pz_error(ctx, PZ_ERR_USAGE, "flatten: --fabric: '%s': stiffnesses must be positive", text);
+        settings->fabric = (pz_fabric){fabric[0], fabric[1], fabric[2]};
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_GRAIN))) {
+        if ((status = parse_numbers("--grain", text, settings->grain, 3, ctx)))
+            return status;
+        if (settings->grain[0] == 0 && settings->grain[1] == 0 && settings->grain[2] == 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --grain: '%s' is the zero vector", text);
+        settings->grain_given = 1;
+    }
+    if (!args->output_path)
+        return pz_error(ctx, PZ_ERR_USAGE, "flatten: -o DIR is required (see panelize flatten --help)");
+    if (args->positional_count < 1)
+        return pz_error(ctx, PZ_ERR_USAGE, "flatten: expected MESH (see panelize flatten --help)");
+    if (args->positional_count > 1 && args->pose_path_count > 0)
+        return pz_error(ctx, PZ_ERR_USAGE, "flatten: --pose works with one MESH, not %d panel files",
+                        args->positional_count);
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- reading */
+
+/* The garment and how the input files' vertex ids map onto it. */
+typedef struct garment_input {
+    pz_mesh *mesh;              /* prepared, millimetres */
+    pz_units units;
+    int32_t file_count;
+    int32_t *file_vertex_offset;  /* file_count + 1, raw ids */
+    int32_t raw_vertex_count, raw_face_count;
+    double *raw_positions;      /* raw_vertex_count x 3 in the file's units */
+    int32_t *raw_to_garment;    /* raw_vertex_count: prepared vertex, or -1 when unreferenced */
+    int ids_preserved;          /* preparation dropped only unreferenced vertices: raw ids map exactly */
+    double *output_positions;   /* mesh->vertex_count x 3 in the file's units, for garment.obj */
+} garment_input;
+
+static void garment_input_clear(garment_input *input)
+{
+    pz_mesh_free(&input->mesh);
+    free(input->file_vertex_offset);
+    free(input->raw_positions);
+    free(input->raw_to_garment);
+    free(input->output_positions);
+    memset(input, 0, sizeof *input);
+}
+
+static char *duplicate_base_name(const char *path)
+{
+    const char *base = strrchr(path, '/');
+    base = base ? base + 1 : path;
+    size_t length = strlen(base);
+    const char *dot = strrchr(base, '.');
+    if (dot && dot != base)
+        length = (size_t)(dot - base);
+    char *copy = malloc(length + 1);
+    if (copy) {
+        memcpy(copy, base, length);
+        copy[length] = '\0';
+    }
+    return copy;
+}
+
+/* Panel files one after another, no welding; label K = file K (named after the file). */
+static pz_status concatenate(pz_mesh *const *parts, const char *const *paths, int32_t count, pz_mesh **out,
+                             int32_t *vertex_offset, pz_ctx *ctx)
+{
+    *out = NULL;
+    int64_t vertices = 0, faces = 0, uvs = 0;
+    int all_uvs = 1;
+    for (int32_t i = 0; i < count; ++i) {
+        vertex_offset[i] = (int32_t)vertices;
+        vertices += parts[i]->vertex_count;
+        faces += parts[i]->face_count;
+        uvs += parts[i]->uv_count;
+        all_uvs &= parts[i]->uvs != NULL;
+    }
+    vertex_offset[count] = (int32_t)vertices;
+    if (vertices > INT32_MAX / 3 || faces > INT32_MAX / 3 || uvs > INT32_MAX / 2)
+        return pz_error(ctx, PZ_ERR_DATA, "%s: the panel files together are too large", paths[0]);
+    pz_mesh *mesh = NULL;
+    pz_status status = pz_mesh_create((int32_t)vertices, (int32_t)faces, &mesh, ctx);
+    if (status != PZ_OK)
+        return status;
+    mesh->face_labels = malloc(((size_t)faces + 1) * sizeof(int32_t));
+    mesh->label_names = calloc((size_t)count + 1, sizeof(char *));
+    if (all_uvs) {
+        mesh->uvs = malloc(((size_t)uvs + 1) * 2 * sizeof(double));
+        mesh->corner_uvs = malloc(((size_t)faces + 1) * 3 * sizeof(int32_t));
+        mesh->uv_count = (int32_t)uvs;
+    }
+    int failed = !mesh->face_labels || !mesh->label_names || (all_uvs && (!mesh->uvs || !mesh->corner_uvs));
+    mesh->label_count = count;
+    size_t face_at = 0, uv_at = 0;
+    for (int32_t i = 0; i < count && !failed; ++i) {
+        const pz_mesh *part = parts[i];
+        memcpy(mesh->positions + 3 * (size_t)vertex_offset[i], part->positions,
+               3 * (size_t)part->vertex_count * sizeof(double));
+        for (size_t c = 0; c < 3 * (size_t)part->face_count; ++c) {
+            mesh->faces[3 * face_at + c] = part->faces[c] + vertex_offset[i];
+            if (all_uvs)
+                mesh->corner_uvs[3 * face_at + c] = part->corner_uvs[c] + (int32_t)uv_at;
+        }
+        for (int32_t f = 0; f < part->face_count; ++f)
+            mesh->face_labels[face_at + (size_t)f] = i;
+        if (all_uvs)
+            memcpy(mesh->uvs + 2 * uv_at, part->uvs, 2 * (size_t)part->uv_count * sizeof(double));
+        face_at += (size_t)part->face_count;
+        uv_at += (size_t)part->uv_count;
+        mesh->label_names[i] = duplicate_base_name(paths[i]);
+        failed |= !mesh->label_names[i];
+    }
+    if (failed) {
+        pz_mesh_free(&mesh);
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory joining the panel files", paths[0]);
+    }
+    *out = mesh;
+    return PZ_OK;
+}
+
+/* Reads the input files into input->mesh (raw units) and sets the file offsets. */
+static pz_status read_raw(const pz_cli_args *args, garment_input *input, pz_ctx *ctx)
+{
+    int32_t count = args->positional_count;
+    input->file_count = count;
+    input->file_vertex_offset = calloc((size_t)count + 1, sizeof(int32_t));
+    if (!input->file_vertex_offset)
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    if (count == 1) {
+        pz_status status = pz_mesh_read_with_poses(args->positionals[0], args->pose_paths, args->pose_path_count,
+                                                   &input->mesh, ctx);
+        if (status == PZ_OK)
+            input->file_vertex_offset[1] = input->mesh->vertex_count;
+        return status;
+    }
+    pz_mesh **parts = calloc((size_t)count, sizeof *parts);
+    if (!parts)
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    pz_status status = PZ_OK;
+    for (int32_t i = 0; i < count && status == PZ_OK; ++i)
+        status = pz_mesh_read(args->positionals[i], &parts[i], ctx);
+    if (status == PZ_OK)
+        status = concatenate(parts, args->positionals, count, &input->mesh, input->file_vertex_offset, ctx);
+    for (int32_t i = 0; i < count; ++i)
+        pz_mesh_free(&parts[i]);
+    free(parts);
+    return status;
+}
+
+/* Raw id -> id after dropping unreferenced vertices (the compaction pz_mesh_prepare does first). */
+static pz_status map_raw_ids(garment_input *input, int32_t *kept, pz_ctx *ctx)
+{
+    const pz_mesh *mesh = input->mesh;
+    input->raw_vertex_count = mesh->vertex_count;
+    input->raw_face_count = mesh->face_count;
+    input->raw_positions = malloc(((size_t)mesh->vertex_count + 1) * 3 * sizeof(double));
+    input->raw_to_garment = malloc(((size_t)mesh->vertex_count + 1) * sizeof(int32_t));
+    if (!input->raw_positions || !input->raw_to_garment)
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    memcpy(input->raw_positions, mesh->positions, 3 * (size_t)mesh->vertex_count * sizeof(double));
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        input->raw_to_garment[v] = -1;
+    for (int32_t c = 0; c < 3 * mesh->face_count; ++c)
+        if (mesh->faces[c] >= 0 && mesh->faces[c] < mesh->vertex_count)
+            input->raw_to_garment[mesh->faces[c]] = 0;
+    *kept = 0;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        if (input->raw_to_garment[v] == 0)
+            input->raw_to_garment[v] = (*kept)++;
+    return PZ_OK;
+}
+
+/*
+ * pz_mesh_prepare notes each repair as it makes it, but a failed run prints
+ * one line only: prepare a copy quietly first, and repeat aloud on success
+ * (as pz_cli_load_valid_mesh does).
+ */
+static pz_status prepare_quietly_first(pz_mesh **mesh, const char *path, unsigned repair_flags, pz_ctx *ctx)
+{
+    pz_mesh *trial = NULL;
+    pz_status status = pz_mesh_copy(*mesh, &trial, ctx);
+    if (status != PZ_OK)
+        return status;
+    int quiet = ctx->quiet;
+    ctx->quiet = 1;
+    status = pz_mesh_prepare(trial, path, repair_flags, ctx);
+    ctx->quiet = quiet;
+    if (status == PZ_OK && quiet) {
+        pz_mesh_free(mesh);
+        *mesh = trial;
+        return PZ_OK;
+    }
+    pz_mesh_free(&trial);
+    if (status != PZ_OK)
+        return status;
+    return pz_mesh_prepare(*mesh, path, repair_flags, ctx);
+}
+
+static pz_status load_garment(const pz_cli_args *args, garment_input *input, pz_ctx *ctx)
+{
+    pz_status status = read_raw(args, input, ctx);
+    int32_t kept = 0;
+    if (status == PZ_OK)
+        status = map_raw_ids(input, &kept, ctx);
+    if (status != PZ_OK)
+        return status;
+    pz_cli_mesh_to_mm(args, input->mesh, &input->units, NULL);
+    status = prepare_quietly_first(&input->mesh, args->positionals[0], args->repair_flags, ctx);
+    if (status != PZ_OK)
+        return status;
+    pz_mesh *mesh = input->mesh;
+    input->ids_preserved = mesh->face_count == input->raw_face_count && mesh->vertex_count == kept;
+    input->output_positions = malloc(((size_t)mesh->vertex_count + 1) * 3 * sizeof(double));
+    if (!input->output_positions)
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    /* garment.obj keeps the input's coordinates exactly: the raw ones when ids still match. */
+    for (int32_t v = 0; v < input->raw_vertex_count && input->ids_preserved; ++v)
+        if (input->raw_to_garment[v] >= 0)
+            memcpy(input->output_positions + 3 * (size_t)input->raw_to_garment[v], input->raw_positions + 3 * (size_t)v,
+                   3 * sizeof(double));
+    if (!input->ids_preserved)
+        for (size_t i = 0; i < 3 * (size_t)mesh->vertex_count; ++i)
+            input->output_positions[i] = mesh->positions[i] / mesh->unit_scale;
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- panels */
+
+/* What the panels were chosen from, their per-face ids, names and extra cuts. */
+typedef struct panel_choice {
+    const char *source;       /* "file", "uv", "files", "groups", "components" */
+    int32_t *face_panel;      /* face_count */
+    int32_t panel_count;
+    uint8_t *extra_cuts;      /* --panels uv only */
+    char **names;             /* panel_count entries (may be NULL), or NULL */
+} panel_choice;
+
+static void panel_choice_drop_names(panel_choice *choice)
+{
+    if (choice->names)
+        for (int32_t p = 0; p < choice->panel_count; ++p)
+            free(choice->names[p]);
+    free(choice->names);
+    choice->names = NULL;
+}
+
+static void panel_choice_clear(panel_choice *choice)
+{
+    free(choice->face_panel);
+    free(choice->extra_cuts);
+    panel_choice_drop_names(choice);
+    memset(choice, 0, sizeof *choice);
+}
+
+typedef struct face_key {
+    int64_t key;    /* label << 32 | component */
+    int32_t face;
+} face_key;
+
+static int compare_face_key(const void *a, const void *b)
+{
+    const face_key *x = a, *y = b;
+    if (x->key != y->key)
+        return (x->key > y->key) - (x->key < y->key);
+    return (x->face > y->face) - (x->face < y->face);
+}
+
+static int compare_int64(const void *a, const void *b)
+{
+    int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/*
+ * One panel per connected piece of each label (group); ids in the order of
+ * the pieces' first faces. Sorting (label, component, face) keys: O(F log F).
+ */
+static pz_status panels_from_groups(const pz_mesh *mesh, panel_choice *choice, pz_ctx *ctx)
+{
+    int32_t face_count = mesh->face_count;
+    int32_t *component = malloc(((size_t)face_count + 1) * sizeof(int32_t));
+    face_key *keys = malloc(((size_t)face_count + 1) * sizeof *keys);
+    int64_t *firsts = malloc(((size_t)face_count + 1) * sizeof *firsts);  /* first face << 32 | group */
+    int32_t *group_label = malloc(((size_t)face_count + 1) * sizeof(int32_t));
+    int32_t *group_rank = malloc(((size_t)face_count + 1) * sizeof(int32_t));
+    pz_status status = PZ_OK;
+    if (!component || !keys || !firsts || !group_label || !group_rank)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory finding panels");
+    int32_t components = status == PZ_OK ? pz_mesh_face_components(mesh, component, ctx) : 0;
+    if (status == PZ_OK && components < 0)
+        status = (pz_status)components;
+    int32_t group_count = 0;
+    if (status == PZ_OK) {
+        for (int32_t f = 0; f < face_count; ++f) {
+            int64_t label = mesh->face_labels ? mesh->face_labels[f] : 0;
+            keys[f] = (face_key){label << 32 | component[f], f};
+        }
+        qsort(keys, (size_t)face_count, sizeof *keys, compare_face_key);
+        for (int32_t i = 0; i < face_count; ++i) {
+            if (i == 0 || keys[i].key != keys[i - 1].key) {
+                group_label[group_count] = (int32_t)(keys[i].key >> 32);
+                firsts[group_count] = (int64_t)keys[i].face << 32 | group_count;
+                ++group_count;
+            }
+            component[keys[i].face] = group_count - 1;  /* reused: the face's group */
+        }
+        qsort(firsts, (size_t)group_count, sizeof *firsts, compare_int64);
+        for (int32_t rank = 0; rank < group_count; ++rank)
+            group_rank[firsts[rank] & 0xffffffff] = rank;
+        choice->face_panel = malloc(((size_t)face_count + 1) * sizeof(int32_t));
+        choice->names = calloc((size_t)group_count + 1, sizeof(char *));
+        if (!choice->face_panel || !choice->names)
+            status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory finding panels");
+    }
+    if (status == PZ_OK) {
+        choice->panel_count = group_count;
+        for (int32_t f = 0; f < face_count; ++f)
+            choice->face_panel[f] = group_rank[component[f]];
+        for (int32_t g = 0; g < group_count && mesh->label_names; ++g) {
+            const char *name = mesh->label_names[group_label[g]];
+            if (name && !(choice->names[group_rank[g]] = strdup(name)))
+                status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory finding panels");
+        }
+        choice->source = mesh->label_count > 1 ? "groups" : "components";
+    }
+    free(component);
+    free(keys);
+    free(firsts);
+    free(group_label);
+    free(group_rank);
+    return status;
+}
+
+/* One panel per input file (the labels concatenate() set). */
+static pz_status panels_from_files(const pz_mesh *mesh, panel_choice *choice, pz_ctx *ctx)
+{
+    choice->face_panel = malloc(((size_t)mesh->face_count + 1) * sizeof(int32_t));
+    choice->names = calloc((size_t)mesh->label_count + 1, sizeof(char *));
+    if (!choice->face_panel || !choice->names)
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory finding panels");
+    memcpy(choice->face_panel, mesh->face_labels, (size_t)mesh->face_count * sizeof(int32_t));
+    choice->panel_count = mesh->label_count;
+    for (int32_t p = 0; p < mesh->label_count; ++p)
+        if (mesh->label_names[p] && !(choice->names[p] = strdup(mesh->label_names[p])))
+            return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory finding panels");
+    choice->source = "files";
+    return PZ_OK;
+}
+
+static pz_status choose_panels(const pz_cli_args *args, const garment_input *input, panel_choice *choice,
+                               pz_ctx *ctx)
+{
+    const pz_mesh *mesh = input->mesh;
+    const char *panels = pz_cli_value(args, PZ_CLI_OPT_PANELS);
+    if (panels && strcmp(panels, "uv") == 0) {
+        if (!mesh->uvs || !mesh->corner_uvs)
+            return pz_error(ctx, PZ_ERR_DATA, "%s: --panels uv: the mesh has no UVs (vt)", args->positionals[0]);
+        choice->face_panel = malloc(((size_t)mesh->face_count + 1) * sizeof(int32_t));
+        if (!choice->face_panel)
+            return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory finding panels");
+        choice->source = "uv";
+        return pz_pattern_panels_from_uv(mesh, choice->face_panel, &choice->panel_count, &choice->extra_cuts, ctx);
+    }
+    if (panels) {
+        if (!input->ids_preserved)
+            return pz_error(ctx, PZ_ERR_DATA, "%s: --repair removed faces, so the per-face panel ids no longer apply",
+                            panels);
+        choice->face_panel = malloc(((size_t)mesh->face_count + 1) * sizeof(int32_t));
+        if (!choice->face_panel)
+            return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory finding panels");
+        choice->source = "file";
+        return pz_flatten_read_panel_file(panels, mesh->face_count, choice->face_panel, &choice->panel_count, ctx);
+    }
+    if (input->file_count > 1)
+        return panels_from_files(mesh, choice, ctx);
+    return panels_from_groups(mesh, choice, ctx);
+}
+
+/* --seams and --darts files as correspondences in garment vertex ids. */
+static pz_status read_correspondences(const pz_cli_args *args, const garment_input *input, int32_t panel_count,
+                                      pz_correspondences *out, pz_ctx *ctx)
+{
+    memset(out, 0, sizeof *out);
+    if (args->seam_path_count + args->dart_path_count == 0)
+        return PZ_OK;
+    const char *first = args->seam_path_count ? args->seam_paths[0] : args->dart_paths[0];
+    if (!input->ids_preserved)
+        return pz_error(ctx, PZ_ERR_DATA, "%s: --repair removed faces or vertices, so the vertex ids no longer apply",
+                        first);
+    pz_vertex_space space = {input->file_count, input->file_vertex_offset, input->raw_to_garment, panel_count};
+    out->seams = calloc((size_t)args->seam_path_count + 1, sizeof(pz_seam));
+    out->darts = calloc((size_t)args->dart_path_count + 1, sizeof(pz_dart));
+    if (!out->seams || !out->darts) {
+        pz_correspondences_clear(out);
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory reading seams");
+    }
+    pz_status status = PZ_OK;
+    for (int i = 0; i < args->seam_path_count && status == PZ_OK; ++i)
+        if ((status = pz_flatten_read_seam(args->seam_paths[i], &space, &out->seams[i], ctx)) == PZ_OK)
+            out->seam_count = i + 1;
+    for (int i = 0; i < args->dart_path_count && status == PZ_OK; ++i)
+        if ((status = pz_flatten_read_dart(args->dart_paths[i], &space, &out->darts[i], ctx)) == PZ_OK)
+            out->dart_count = i + 1;
+    if (status != PZ_OK)
+        pz_correspondences_clear(out);
+    return status;
+}
+
+/* ---------------------------------------------------------------- flatten and measure */
+
+static pz_status flatten(const flatten_settings *settings, const pz_pattern *pattern, double *uv,
+                         pz_textile_result *result, pz_ctx *ctx)
+{
+    if (settings->lscm)
+        return pz_param_lscm_pattern(pattern, settings->grain, uv, ctx);
+    pz_textile_options options = {0};
+    options.iterations = settings->iterations;
+    options.weights_given = 1;
+    options.weight_stretch = settings->weights[0];
+    options.weight_rigid = settings->weights[1];
+    options.weight_dart = settings->weights[2];
+    options.weight_seam = settings->weights[3];
+    options.grain_given = 1;
+    memcpy(options.grain, settings->grain, sizeof options.grain);
+    options.use_poses = pattern->mesh->pose_count > 0;
+    return pz_param_textile(pattern, &options, uv, result, ctx);
+}
+
+/* metrics[0] on the rest pose, metrics[p] on extra pose p. */
+static pz_status measure(const pz_pattern *pattern, const double *uv, const pz_fabric *fabric,
+                         pz_metrics **metrics, int count, pz_ctx *ctx)
+{
+    for (int pose = 0; pose < count; ++pose) {
+        pz_status status = pz_metrics_compute(pattern, uv, pose, fabric, &metrics[pose], ctx);
+        if (status != PZ_OK)
+            return status;
+    }
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- writing */
+
+/* Directories created by this run, removed again when it fails. */
+typedef struct created_dirs {
+    char *paths[64];
+    int count;
+} created_dirs;
+
+static void remove_created_dirs(created_dirs *dirs)
+{
+    while (dirs->count > 0) {
+        --dirs->count;
+        rmdir(dirs->paths[dirs->count]);
+        free(dirs->paths[dirs->count]);
+    }
+}
+
+static void forget_created_dirs(created_dirs *dirs)
+{
+    while (dirs->count > 0)
+        free(dirs->paths[--dirs->count]);
+}
+
+/* mkdir -p: every missing prefix of `dir`, remembering what it created. */
+static pz_status make_directories(const char *dir, created_dirs *dirs, pz_ctx *ctx)
+{
+    char *path = strdup(dir);
+    if (!path)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);
+    size_t length = strlen(path);
+    pz_status status = PZ_OK;
+    for (size_t end = 1; end <= length && status == PZ_OK; ++end) {
+        if (end < length && path[end] != '/')
+            continue;
+        char saved = path[end];
+        path[end] = '\0';
+        struct stat info;
+        if (stat(path, &info) == 0) {
+            if (!S_ISDIR(info.st_mode))
+                status = pz_error(ctx, PZ_ERR_CREATE, "%s: cannot create the output directory: %s is not a directory",
+                                  dir, path);
+        } else if (mkdir(path, 0777) != 0) {
+            status = pz_error(ctx, PZ_ERR_CREATE, "%s: cannot create the output directory: %s", dir, strerror(errno));
+        } else if (dirs->count < (int)(sizeof dirs->paths / sizeof dirs->paths[0])) {
+            if (!(dirs->paths[dirs->count] = strdup(path)))
+                status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);
+            else
+                ++dirs->count;
+        }
+        path[end] = saved;
+    }
+    free(path);
+    return status;
+}
+
+static char *join_path(const char *dir, const char *name)
+{
+    size_t size = strlen(dir) + strlen(name) + 2;
+    char *path = malloc(size);
+    if (path)
+        snprintf(path, size, "%s%s%s", dir, dir[strlen(dir) - 1] == '/' ? "" : "/", name);
+    return path;
+}
+
+enum output_file { OUT_OBJ, OUT_SVG, OUT_REPORT, OUT_COUNT };
+static const char *const output_names[OUT_COUNT] = {"garment.obj", "pattern.svg", "report.json"};
+
+/* Everything the write step needs. */
+typedef struct flatten_run {
+    const pz_cli_args *args;
+    const garment_input *input;
+    const panel_choice *panels;
+    const pz_pattern *pattern;
+    double *uv;
+    pz_flatten_report report;
+    double start, write_start;
+    char *report_text;        /* report.json, for --json too */
+} flatten_run;
+
+static pz_status write_file(flatten_run *run, enum output_file which, FILE *file, pz_ctx *ctx)
+{
+    switch (which) {
+    case OUT_OBJ:
+        return pz_pattern_write_obj(file, run->input->mesh, run->input->output_positions, run->pattern, run->uv, ctx);
+    case OUT_SVG:
+        return pz_pattern_write_svg(file, run->pattern, run->uv, (const char *const *)run->panels->names, ctx);
+    default: {
+        /* Written last, so the write timing covers the other two files. */
+        double now = pz_seconds();
+        run->report.timings_ms[TIME_WRITE] = pz_cli_elapsed_ms(run->write_start, now);
+        run->report.timings_ms[TIME_TOTAL] = pz_cli_elapsed_ms(run->start, now);
+        cJSON *root = pz_flatten_report_json(&run->report);
+        run->report_text = root ? cJSON_Print(root) : NULL;
+        cJSON_Delete(root);
+        if (!run->report_text)
+            return pz_error(ctx, PZ_ERR_NOMEM, "report.json: out of memory");
+        fputs(run->report_text, file);
+        fputc('\n', file);
+        return PZ_OK;
+    }
+    }
+}
+
+/* Writes the three files all or nothing. */
+static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
+{
+    const char *dir = run->args->output_path;
+    created_dirs dirs = {{0}, 0};
+    char *paths[OUT_COUNT] = {0};
+    pz_output outputs[OUT_COUNT];
+    memset(outputs, 0, sizeof outputs);
+    int committed = 0;
+    pz_status status = make_directories(dir, &dirs, ctx);
+    for (int i = 0; i < OUT_COUNT && status == PZ_OK; ++i)
+        if (!(paths[i] = join_path(dir, output_names[i])))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);
+    for (int i = 0; i < OUT_COUNT && status == PZ_OK; ++i)
+        if ((status = pz_output_open(&outputs[i], paths[i], "wb", ctx)) == PZ_OK)
+            status = write_file(run, (enum output_file)i, outputs[i].file, ctx);
+    for (; committed < OUT_COUNT && status == PZ_OK; ++committed)
+        if ((status = pz_output_commit(&outputs[committed], ctx)) != PZ_OK)
+            break;
+    if (status != PZ_OK) {
+        /* Abort is a no-op on an output never opened or already committed (its fields are cleared). */
+        for (int i = 0; i < OUT_COUNT; ++i)
+            pz_output_abort(&outputs[i]);
+        for (int i = 0; i < committed; ++i)
+            remove(paths[i]);
+        remove_created_dirs(&dirs);
+    }
+    forget_created_dirs(&dirs);
+    for (int i = 0; i < OUT_COUNT; ++i)
+        free(paths[i]);
+    return status;
+}
+
+static pz_status print_result(const flatten_run *run, const pz_metrics *const *metrics, int metrics_count,
+                              pz_ctx *ctx)
+{
+    if (run->args->json) {
+        fputs(run->report_text, stdout);
+        fputc('\n', stdout);
+        return PZ_OK;
+    }
+    const pz_metrics *rest = metrics[0];
+    double max_abs_strain = 0;
+    int injective = 1;
+    for (int i = 0; i < metrics_count; ++i) {
+        max_abs_strain = fmax(max_abs_strain, metrics[i]->max_abs_strain);
+        injective &= metrics[i]->injective != 0;
+    }
+    printf("panels:             %d (from %s)\n", (int)rest->panel_count, run->panels->source);
+    printf("seams, darts:       %d, %d\n", (int)rest->seam_count, (int)rest->dart_count);
+    printf("max |strain|:       %.6f%s\n", max_abs_strain, metrics_count > 1 ? " (worst pose)" : "");
+    printf("injective:          %s\n", injective ? "yes" : "no");
+    printf("max seam mismatch:  %.6f\n", rest->max_seam_mismatch_rel);
+    printf("wrote:              %s/{garment.obj,pattern.svg,report.json}\n", run->args->output_path);
+    (void)ctx;
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- the command */
+
+pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
+{
+    flatten_settings settings;
+    pz_status status = parse_settings(args, &settings, ctx);
+    if (status != PZ_OK)
+        return status;
+    flatten_run run;
+    memset(&run, 0, sizeof run);
+    run.args = args;
+    run.start = pz_seconds();
+    garment_input input = {0};
+    panel_choice panels = {0};
+    pz_correspondences correspondences = {0};
+    pz_pattern *pattern = NULL;
+    double *uv = NULL;
+    pz_textile_result textile = {0};
+    int metrics_count = 0, layout_moved = 0;
+    pz_metrics **metrics = NULL;
+    double *timings = run.report.timings_ms, mark = run.start, now;
+
+    status = load_garment(args, &input, ctx);
+    timings[TIME_READ] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
+    if (status == PZ_OK)
+        status = choose_panels(args, &input, &panels, ctx);
+    if (status == PZ_OK)
+        status = read_correspondences(args, &input, panels.panel_count, &correspondences, ctx);
+    if (status == PZ_OK)
+        status = pz_pattern_build(input.mesh, panels.face_panel, panels.extra_cuts, &correspondences,
+                                  args->positionals[0], &pattern, ctx);
+    timings[TIME_PATTERN] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
+    if (status == PZ_OK && !(uv = calloc(2 * (size_t)pattern->mesh->vertex_count + 2, sizeof(double))))
+        status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    if (status == PZ_OK)
+        status = flatten(&settings, pattern, uv, &textile, ctx);
+    if (status == PZ_OK)
+        status = pz_pattern_layout(pattern, uv, LAYOUT_GAP_MM, &layout_moved, ctx);
+    timings[TIME_FLATTEN] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
+    if (status == PZ_OK) {
+        metrics_count = 1 + pattern->mesh->pose_count;
+        if (!(metrics = calloc((size_t)metrics_count, sizeof *metrics)))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    }
+    if (status == PZ_OK)
+        status = measure(pattern, uv, &settings.fabric, metrics, metrics_count, ctx);
+    timings[TIME_METRICS] = pz_cli_elapsed_ms(mark, now = pz_seconds());
+    if (status == PZ_OK) {
+        run.input = &input;
+        run.panels = &panels;
+        run.pattern = pattern;
+        run.uv = uv;
+        run.write_start = pz_seconds();
+        pz_flatten_report *report = &run.report;
+        report->input_paths = args->positionals;
+        report->input_count = args->positional_count;
+        report->vertices = input.mesh->vertex_count;
+        report->faces = input.mesh->face_count;
+        report->poses = input.mesh->pose_count;
+        report->units = pz_units_str(input.units);
+        report->units_guessed = args->units == PZ_UNITS_AUTO;
+        report->panels_source = panels.source;
+        report->backend = settings.lscm ? "lscm" : "textile";
+        report->iterations = settings.iterations;
+        memcpy(report->weights, settings.weights, sizeof report->weights);
+        report->fabric = settings.fabric;
+        memcpy(report->grain, settings.grain, sizeof report->grain);
+        report->textile = settings.lscm ? NULL : &textile;
+        report->layout_moved = layout_moved;
+        report->pattern = pattern;
+        report->metrics = (const pz_metrics *const *)metrics;
+        report->metrics_count = metrics_count;
+        /* Names belong to the panels as chosen; should the pattern number them otherwise, show none. */
+        if (pattern->panel_count != panels.panel_count)
+            panel_choice_drop_names(&panels);
+        report->panel_names = (const char *const *)panels.names;
+        status = write_outputs(&run, ctx);
+    }
+    if (status == PZ_OK) {
+        pz_note(ctx, "flatten: %d panel%s; read %.1f ms, pattern %.1f ms, flatten %.1f ms, metrics %.1f ms, "
+                "write %.1f ms, total %.1f ms", (int)pattern->panel_count,
+                pattern->panel_count == 1 ? "" : "s", timings[TIME_READ], timings[TIME_PATTERN],
+                timings[TIME_FLATTEN], timings[TIME_METRICS], timings[TIME_WRITE], timings[TIME_TOTAL]);
+        pz_cli_warn_units(args, args->positionals[0], input.mesh, input.units, ctx);
+        status = print_result(&run, (const pz_metrics *const *)metrics, metrics_count, ctx);
+    }
+    free(run.report_text);
+    for (int i = 0; metrics && i < metrics_count; ++i)
+        pz_metrics_free(&metrics[i]);
+    free(metrics);
+    free(uv);
+    pz_pattern_free(&pattern);
+    pz_correspondences_clear(&correspondences);
+    panel_choice_clear(&panels);
+    garment_input_clear(&input);
+    return status;
+}

@@ -1,0 +1,109 @@
+/*
+ * pipeline/pattern_output.h -- what `panelize flatten` reads besides the mesh
+ * (panel files, seam and dart files) and what it writes (garment.obj with the
+ * pattern as vt, pattern.svg, report.json). Shared by cmd_flatten.c and
+ * pattern_output.c only; the formats are described in docs/flatten.md.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_PATTERN_OUTPUT_H
+#define PZ_PATTERN_OUTPUT_H
+
+#include "param/param.h"
+#include "pipeline/cli.h"
+
+/* ---------------------------------------------------------------- readers */
+
+/**
+ * A panels file: one integer panel id per line, one line per face (blank
+ * lines at the end are ignored). Ids must be 0..K-1 with every id used.
+ * Writes face_count ids to face_panel and K to *panel_count. PZ_ERR_OPEN when
+ * unreadable, PZ_ERR_DATA naming the file and line otherwise.
+ */
+pz_status pz_flatten_read_panel_file(const char *path, int32_t face_count, int32_t *face_panel,
+                                     int32_t *panel_count, pz_ctx *ctx);
+
+/**
+ * How the vertex ids of seam and dart files map to garment vertices. With one
+ * input file (file_count 1) ids are the file's vertex ids; with several
+ * panel files, ids are local to panel K's file, which starts at raw vertex
+ * file_vertex_offset[K] of the concatenation. raw_to_garment maps raw ids to
+ * the prepared garment's vertices (-1: dropped as unreferenced).
+ */
+typedef struct pz_vertex_space {
+    int32_t file_count;
+    const int32_t *file_vertex_offset;  /* file_count + 1 */
+    const int32_t *raw_to_garment;      /* file_vertex_offset[file_count] */
+    int32_t panel_count;                /* panel ids in the files must be below this */
+} pz_vertex_space;
+
+/**
+ * A seam file: line 1 panel of side A, line 2 panel of side B, then `a b`
+ * vertex pairs (a on panel A, b on panel B). Fills `seam` with garment
+ * vertex ids (caller frees side_a/side_b, also through
+ * pz_correspondences_clear). PZ_ERR_DATA names the file and line.
+ */
+pz_status pz_flatten_read_seam(const char *path, const pz_vertex_space *space, pz_seam *seam, pz_ctx *ctx);
+
+/**
+ * A dart given as `FILE` or `K:FILE`: line 1 the tip vertex, then `p q`
+ * pairs facing each other on the two legs. The panel K comes from the `K:`
+ * prefix or from a file name `patch_K_dart_J...`; with several panel files
+ * it is required (PZ_ERR_USAGE when it cannot be told).
+ */
+pz_status pz_flatten_read_dart(const char *spec, const pz_vertex_space *space, pz_dart *dart, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- layout and writers */
+
+/**
+ * When the bounding boxes of two panels overlap, translates every panel into
+ * rows (shelves, tallest first, rows about as wide as the whole layout is
+ * tall) with gap_mm between pieces; a layout without overlaps is kept as the
+ * back-end made it. uv is pattern->mesh->vertex_count x 2, changed in place.
+ * Sets *moved.
+ */
+pz_status pz_pattern_layout(const pz_pattern *pattern, double *uv, double gap_mm, int *moved, pz_ctx *ctx);
+
+/**
+ * garment.obj: `v` = positions (garment vertex_count x 3, written as given),
+ * `vt` = uv of every cut-mesh vertex, faces = the garment's faces in order
+ * with the vt of the cut-mesh corner, `g panel_K` whenever the panel changes.
+ */
+pz_status pz_pattern_write_obj(FILE *file, const pz_mesh *garment, const double *positions,
+                               const pz_pattern *pattern, const double *uv, pz_ctx *ctx);
+
+/**
+ * pattern.svg at 1:1 in millimetres: one <g id="panel_K"> per panel with its
+ * triangle edges (light), outline (closed boundary loops), grainline arrow
+ * along +v through the piece's centroid and the piece name. panel_names
+ * (panel_count, entries may be NULL) are shown next to "panel_K".
+ */
+pz_status pz_pattern_write_svg(FILE *file, const pz_pattern *pattern, const double *uv,
+                               const char *const *panel_names, pz_ctx *ctx);
+
+/** Everything report.json says besides the metrics. */
+typedef struct pz_flatten_report {
+    const char *const *input_paths;
+    int input_count;
+    int32_t vertices, faces, poses;
+    const char *units;            /* the input's units ("mm", "cm", "m") */
+    int units_guessed;
+    const char *panels_source;    /* "file", "uv", "files", "groups", "components" */
+    const char *backend;          /* "textile" or "lscm" */
+    int iterations;
+    double weights[4];            /* stretch, rigid, dart, seam */
+    pz_fabric fabric;             /* the constants used */
+    double grain[3];
+    const pz_textile_result *textile;  /* NULL for lscm */
+    int layout_moved;
+    double timings_ms[6];         /* read, pattern, flatten, metrics, write, total */
+    const pz_pattern *pattern;
+    const pz_metrics *const *metrics;  /* metrics_count: rest pose first, then each extra pose */
+    int metrics_count;
+    const char *const *panel_names;
+} pz_flatten_report;
+
+/** Builds report.json (docs/flatten.md); NULL when out of memory. */
+cJSON *pz_flatten_report_json(const pz_flatten_report *report);
+
+#endif /* PZ_PATTERN_OUTPUT_H */

@@ -1,0 +1,281 @@
+#!/usr/bin/env bash
+# tests/cli/test_cli_flatten.sh -- `panelize flatten` end to end: developable
+# surfaces flatten without strain, a closed tube gets one self-seam of equal
+# sides, a hemisphere stays injective; the real skirt panels keep their seams
+# and darts symmetric; --panels uv finds the T-shirt's 4 panels; garment.obj
+# keeps the input's vertices and faces; pattern.svg is well-formed 1:1 SVG;
+# every bad option and bad file fails with its exit code, one line naming the
+# culprit, and nothing written.
+#
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -u
+
+source "$(dirname "$0")/lib.sh"
+
+DATA=${PZ_SHARED_DATA:-}
+
+# report_checks WHAT DIR DESCRIPTION EXPR...: json_checks over DIR/report.json.
+report_checks() {
+    local what=$1 dir=$2
+    shift 2
+    cp "$dir/report.json" "$WORK/out"
+    json_checks "$what" "$@"
+}
+
+keys='["input","parameters","timings_ms","panels","seams","darts","summary"]'
+panel_keys='["id","faces","area_3d_mm2","area_2d_mm2","strain_warp","strain_weft","shear_deg",
+"orthotropic_energy","arap_energy","E_len","E_ang","E_area","E_shape","flipped_triangles",
+"boundary_self_intersections"]'
+seam_keys='["panels","length_3d_mm","length_a_mm","length_b_mm","mismatch_rel","reflection_residual_mm"]'
+
+# garment_obj_checks WHAT INPUT.obj DIR PANELS: garment.obj keeps INPUT's v lines (as numbers) and
+# face vertex indices, has vt for every corner and PANELS distinct `g panel_K` groups.
+garment_obj_checks() {
+    check "$1: garment.obj does not match the input" python3 - "$2" "$3/garment.obj" "$4" <<'PY'
+import sys
+def read(path):
+    v, vt, faces, groups = [], 0, [], []
+    for line in open(path):
+        t = line.split()
+        if not t:
+            continue
+        if t[0] == 'v':
+            v.append(tuple(float(x) for x in t[1:4]))
+        elif t[0] == 'vt':
+            vt += 1
+        elif t[0] == 'g':
+            groups.append(t[1])
+        elif t[0] == 'f':
+            faces.append([c.split('/') for c in t[1:]])
+    return v, vt, faces, groups
+src_v, _, src_f, _ = read(sys.argv[1])
+out_v, out_vt, out_f, groups = read(sys.argv[2])
+assert out_v == src_v, "positions differ"
+assert [[int(c[0]) for c in f] for f in out_f] == [[int(c[0]) for c in f] for f in src_f], "faces differ"
+assert all(len(c) >= 2 and 1 <= int(c[1]) <= out_vt for f in out_f for c in f), "a corner without vt"
+panels = int(sys.argv[3])
+assert sorted(set(groups)) == sorted("panel_%d" % k for k in range(panels)), "groups %s" % sorted(set(groups))
+PY
+}
+
+# svg_checks WHAT DIR PANELS: pattern.svg parses, is sized in mm and has one group per panel.
+svg_checks() {
+    check "$1: pattern.svg is not a 1:1 SVG with $3 panel groups" python3 - "$2/pattern.svg" "$3" <<'PY'
+import re, sys, xml.etree.ElementTree as ET
+root = ET.parse(sys.argv[1]).getroot()
+ns = '{http://www.w3.org/2000/svg}'
+assert root.tag == ns + 'svg'
+width, height = root.get('width'), root.get('height')
+assert width.endswith('mm') and height.endswith('mm')
+box = [float(x) for x in root.get('viewBox').split()]
+assert abs(box[2] - float(width[:-2])) < 1e-6 and abs(box[3] - float(height[:-2])) < 1e-6, "not 1 unit = 1 mm"
+ids = [g.get('id') for g in root.iter(ns + 'g')]
+assert sorted(ids) == sorted("panel_%d" % k for k in range(int(sys.argv[2]))), ids
+for g in root.iter(ns + 'g'):
+    classes = [p.get('class') for p in g.iter(ns + 'path')]
+    assert 'outline' in classes and 'grainline' in classes, classes
+    outline = [p for p in g.iter(ns + 'path') if p.get('class') == 'outline'][0].get('d')
+    assert outline.startswith('M') and outline.rstrip().endswith('Z')
+PY
+}
+
+# ------------------------------------------------------------------ developable surfaces: no strain
+for shape in "cylinder --open" "cone --open"; do
+    name=${shape%% *}
+    # shellcheck disable=SC2086 # shape holds the name and its flag
+    run generate $shape -o "$name.obj" --faces 2000 --quiet
+    for backend in textile lscm; do
+        what="flatten $name --open --backend $backend"
+        run flatten "$name.obj" -o "$name-$backend" --backend $backend --quiet
+        expect_ok "$what"
+        check "$what: --quiet printed on stderr" [ ! -s "$WORK/err" ]
+        report_checks "$what" "$name-$backend" \
+            "missing keys" "all(k in d for k in $(echo $keys))" \
+            "panel keys" "all(k in p for p in d['panels'] for k in $(echo $panel_keys))" \
+            "input keys" "all(k in d['input'] for k in ('file', 'vertices', 'faces', 'poses', 'units'))" \
+            "timings" "all(d['timings_ms'][k] >= 0 for k in ('read', 'pattern', 'flatten', 'metrics', 'write', 'total'))" \
+            "parameters" "d['parameters']['backend'] == '$backend' and d['parameters']['grain'] == [0, 0, 1]" \
+            "one panel" "d['summary']['panel_count'] == 1 == len(d['panels'])" \
+            "max_abs_strain < 1e-4" "d['summary']['max_abs_strain'] < 1e-4" \
+            "injective" "d['summary']['injective'] is True" \
+            "2D area = 3D area" "abs(d['panels'][0]['area_2d_mm2'] / d['panels'][0]['area_3d_mm2'] - 1) < 1e-3"
+        garment_obj_checks "$what" "$name.obj" "$name-$backend" 1
+        svg_checks "$what" "$name-$backend" 1
+    done
+done
+
+# ------------------------------------------------------------------ a closed tube: one self-seam
+run generate cylinder -o tube.obj --faces 2000 --quiet
+run flatten tube.obj -o tube --json --quiet
+expect_ok "flatten tube.obj"
+json_checks "flatten tube.obj --json" \
+    "one panel" "d['summary']['panel_count'] == 1" \
+    "one self-seam" "len(d['seams']) == 1 and d['seams'][0]['panels'] == [0, 0]" \
+    "seam keys" "all(k in d['seams'][0] for k in $(echo $seam_keys))" \
+    "seam sides equal" "d['seams'][0]['mismatch_rel'] < 1e-3" \
+    "seam length is the tube's height" "abs(d['seams'][0]['length_a_mm'] / d['seams'][0]['length_3d_mm'] - 1) < 1e-3" \
+    "injective" "d['summary']['injective'] is True"
+check "--json prints what report.json holds" cmp -s <(python3 -m json.tool "$WORK/out") \
+    <(python3 -m json.tool tube/report.json)
+
+# ------------------------------------------------------------------ a hemisphere: strained, but injective
+run generate hemisphere -o hemi.obj --faces 2000 --quiet
+run flatten hemi.obj -o hemi --quiet --iterations 30 --weights 5,1,5,5 --fabric 1,0.5,0.2 --grain 0,1,0
+expect_ok "flatten hemi.obj"
+report_checks "flatten hemi.obj" hemi \
+    "injective" "d['summary']['injective'] is True and d['panels'][0]['flipped_triangles'] == 0" \
+    "a sphere cannot flatten without strain" "0.001 < d['summary']['max_abs_strain'] < 1" \
+    "parameters kept" "d['parameters']['iterations'] == 30 and d['parameters']['grain'] == [0, 1, 0] and d['parameters']['fabric']['k_su_N_per_mm'] == 1"
+
+# ------------------------------------------------------------------ panels from a file, OBJ groups, poses
+python3 -c "
+faces = sum(1 for line in open('tube.obj') if line.startswith('f '))
+open('halves.txt', 'w').write(''.join('%d\n' % (2 * f // faces) for f in range(faces)))
+open('short.txt', 'w').write('0\n' * (faces - 1))
+open('gap.txt', 'w').write(''.join('%d\n' % (2 * (2 * f // faces)) for f in range(faces)))
+open('word.txt', 'w').write('0\n' * 5 + 'one\n' + '0\n' * (faces - 6))
+"
+run flatten tube.obj -o halves --panels halves.txt --quiet
+expect_ok "flatten --panels halves.txt"
+report_checks "flatten --panels halves.txt" halves \
+    "two panels" "d['summary']['panel_count'] == 2 and d['input']['panels_from'] == 'file'" \
+    "faces split" "sum(p['faces'] for p in d['panels']) == d['input']['faces']" \
+    "panels do not overlap and stay injective" "d['summary']['injective'] is True"
+garment_obj_checks "flatten --panels halves.txt" tube.obj halves 2
+svg_checks "flatten --panels halves.txt" halves 2
+# The same split as OBJ groups.
+python3 -c "
+lines = open('tube.obj').read().splitlines()
+faces = [l for l in lines if l.startswith('f ')]
+out = [l for l in lines if not l.startswith(('f ', 'g ', 'o '))]
+out.append('g front'); out += faces[:len(faces) // 2]
+out.append('g back'); out += faces[len(faces) // 2:]
+open('groups.obj', 'w').write('\n'.join(out) + '\n')
+"
+run flatten groups.obj -o groups --quiet
+expect_ok "flatten groups.obj"
+report_checks "flatten groups.obj" groups \
+    "two panels from groups" "d['summary']['panel_count'] == 2 and d['input']['panels_from'] == 'groups'" \
+    "named after the groups" "[p.get('name') for p in d['panels']] == ['front', 'back']"
+# Poses: strain is measured on every pose.
+run generate sleeve -o sleeve.obj --faces 2000 --poses 2 --quiet
+run flatten sleeve.obj --pose sleeve.pose1.obj --pose sleeve.pose2.obj -o sleeve --quiet --iterations 5
+expect_ok "flatten sleeve.obj with poses"
+report_checks "flatten sleeve with poses" sleeve \
+    "3 poses measured" "d['input']['poses'] == 2 and len(d['summary']['max_abs_strain_by_pose']) == 3" \
+    "max over poses" "d['summary']['max_abs_strain'] == max(d['summary']['max_abs_strain_by_pose'])"
+
+# ------------------------------------------------------------------ the real skirt panels with seams and darts
+if [ -n "$DATA" ] && [ -f "$DATA/seams/skirt_0.obj" ]; then
+    S=$DATA/seams
+    run flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o skirt --seams "$S/seam0.txt" --seams "$S/seam1.txt" \
+        --darts "$S/patch_0_dart_0.txt" --darts "$S/patch_0_dart_1.txt" --darts "1:$S/patch_1_dart_0.txt" \
+        --darts "$S/patch_1_dart_1.txt" --quiet
+    expect_ok "flatten skirt_0.obj skirt_1.obj"
+    report_checks "flatten skirt" skirt \
+        "two panels, one per file" "d['summary']['panel_count'] == 2 and d['input']['panels_from'] == 'files'" \
+        "the two given seams" "len(d['seams']) == 2 and all(s['panels'] == [0, 1] for s in d['seams'])" \
+        "seam sides equal within 0.5%" "all(s['mismatch_rel'] < 0.005 for s in d['seams'])" \
+        "seams reflect onto each other within 1 mm" "all(s['reflection_residual_mm'] < 1 for s in d['seams'])" \
+        "four darts, two per panel" "sorted(x['panel'] for x in d['darts']) == [0, 0, 1, 1]" \
+        "dart legs equal within 0.5%" "all(abs(x['leg_a_mm'] - x['leg_b_mm']) <= 0.005 * max(x['leg_a_mm'], x['leg_b_mm']) for x in d['darts'])" \
+        "injective" "d['summary']['injective'] is True"
+    svg_checks "flatten skirt" skirt 2
+    # Bad seam and dart files.
+    printf '0\n1\n155 543\n152\n' >odd.txt
+    expect_error 65 odd.txt --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --seams odd.txt
+    check "odd pair: names the line" grep -q 'line 4' "$WORK/err"
+    printf '0\n1\n155 543\n152 x\n' >nan.txt
+    expect_error 65 nan.txt --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --seams nan.txt
+    printf '0\n1\n155 9999\n' >range.txt
+    expect_error 65 range.txt --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --seams range.txt
+    printf '0\n7\n155 543\n' >panel.txt
+    expect_error 65 panel.txt --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --seams panel.txt
+    check "bad panel id: names line 2" grep -q 'line 2' "$WORK/err"
+    printf '202\n800 828\n826\n' >dart.txt
+    expect_error 65 dart.txt --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --darts 0:dart.txt
+    expect_error 64 dart.txt --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --darts dart.txt
+    expect_error 64 --pose --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --pose x.obj
+else
+    echo "SKIPPED: the skirt panels (no \$PZ_SHARED_DATA/seams)"
+fi
+
+# ------------------------------------------------------------------ the T-shirt's own pattern: --panels uv
+if [ -n "$DATA" ] && [ -f "$DATA/garments/diffavatar-tshirt.obj" ]; then
+    T=$DATA/garments/diffavatar-tshirt.obj
+    run flatten "$T" --panels uv -o tshirt --quiet
+    expect_ok "flatten diffavatar-tshirt.obj --panels uv"
+    report_checks "flatten tshirt --panels uv" tshirt \
+        "4 panels" "d['summary']['panel_count'] == 4 and d['input']['panels_from'] == 'uv'" \
+        "units guessed cm" "d['input']['units'] == 'cm'" \
+        "seams between the panels" "len(d['seams']) >= 4 and all(s['mismatch_rel'] < 0.05 for s in d['seams'])" \
+        "injective" "d['summary']['injective'] is True"
+    garment_obj_checks "flatten tshirt --panels uv" "$T" tshirt 4
+    svg_checks "flatten tshirt --panels uv" tshirt 4
+else
+    echo "SKIPPED: the T-shirt (no \$PZ_SHARED_DATA/garments)"
+fi
+
+# ------------------------------------------------------------------ output directory
+run flatten tube.obj -o deep/er/dir --quiet
+expect_ok "flatten -o deep/er/dir (mkdir -p)"
+check "mkdir -p wrote all three files" [ -s deep/er/dir/garment.obj ] && [ -s deep/er/dir/pattern.svg ] && [ -s deep/er/dir/report.json ]
+touch plain-file
+expect_error 73 plain-file -- flatten tube.obj -o plain-file/out
+mkdir -p locked && chmod 555 locked
+if [ ! -w locked ]; then # root writes anyway
+    expect_error 73 locked --absent locked/out -- flatten tube.obj -o locked/out
+fi
+chmod 755 locked
+# report.json (renamed last) cannot replace a directory: the two files renamed before it go again.
+mkdir -p clash/report.json
+expect_error 73 clash/report.json -- flatten tube.obj -o clash
+check "a failed commit left files behind: $(ls clash)" [ "$(ls clash)" = report.json ]
+
+# ------------------------------------------------------------------ bad options (64) and bad data (65)
+expect_error 64 --backend --absent bad -- flatten tube.obj -o bad --backend magic
+expect_error 64 --iterations --absent bad -- flatten tube.obj -o bad --iterations 0
+expect_error 64 --iterations --absent bad -- flatten tube.obj -o bad --iterations 10001
+expect_error 64 --iterations --absent bad -- flatten tube.obj -o bad --iterations 2x
+expect_error 64 --weights --absent bad -- flatten tube.obj -o bad --weights 1,2,3
+expect_error 64 --weights --absent bad -- flatten tube.obj -o bad --weights 1,2,-3,4
+expect_error 64 --weights --absent bad -- flatten tube.obj -o bad --weights 1,nan,3,4
+expect_error 64 --weights --absent bad -- flatten tube.obj -o bad --weights 1,2,3,4,5
+expect_error 64 --fabric --absent bad -- flatten tube.obj -o bad --fabric 1,0,1
+expect_error 64 --fabric --absent bad -- flatten tube.obj -o bad --fabric 1,inf,1
+expect_error 64 --grain --absent bad -- flatten tube.obj -o bad --grain 0,0,0
+expect_error 64 --grain --absent bad -- flatten tube.obj -o bad --grain 0,1
+expect_error 64 -o -- flatten tube.obj
+expect_error 64 MESH --absent bad -- flatten -o bad
+expect_error 65 short.txt --absent bad -- flatten tube.obj -o bad --panels short.txt
+expect_error 65 word.txt --absent bad -- flatten tube.obj -o bad --panels word.txt
+check "non-integer panel id: names line 6" grep -q 'line 6' "$WORK/err"
+expect_error 65 gap.txt --absent bad -- flatten tube.obj -o bad --panels gap.txt
+: >empty.txt
+expect_error 65 empty.txt --absent bad -- flatten tube.obj -o bad --panels empty.txt
+expect_error 66 missing.txt --absent bad -- flatten tube.obj -o bad --panels missing.txt
+expect_error 65 tube.obj --absent bad -- flatten tube.obj -o bad --panels uv
+expect_error 66 missing.obj --absent bad -- flatten missing.obj -o bad
+# A torus is not a disk and cannot be cut into one by panels alone.
+python3 -c "
+import math
+n, m = 24, 12
+v = ['v %f %f %f' % ((300 + 100 * math.cos(2 * math.pi * j / m)) * math.cos(2 * math.pi * i / n),
+                     (300 + 100 * math.cos(2 * math.pi * j / m)) * math.sin(2 * math.pi * i / n),
+                     100 * math.sin(2 * math.pi * j / m)) for i in range(n) for j in range(m)]
+f = []
+for i in range(n):
+    for j in range(m):
+        a, b = i * m + j, ((i + 1) % n) * m + j
+        c, d = ((i + 1) % n) * m + (j + 1) % m, i * m + (j + 1) % m
+        f += ['f %d %d %d' % (a + 1, b + 1, c + 1), 'f %d %d %d' % (a + 1, c + 1, d + 1)]
+open('torus.obj', 'w').write('\n'.join(v + f) + '\n')
+"
+expect_error 65 torus.obj --absent bad -- flatten torus.obj -o bad
+# An existing directory keeps its other files when a run fails.
+mkdir -p keep && echo x >keep/other.txt
+expect_error 65 empty.txt -- flatten tube.obj -o keep --panels empty.txt
+check "a failed run removed a file it did not write" [ -f keep/other.txt ]
+check "a failed run wrote into an existing directory" [ "$(ls keep)" = other.txt ]
+
+finish

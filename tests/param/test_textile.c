@@ -1,0 +1,694 @@
+/*
+ * tests/param/test_textile.c -- the textile parameterization (pz_param_textile):
+ *  - open cylinder and open cone (developable, one panel): every 2D edge
+ *    within 1e-4 relative of its 3D length, no flipped face;
+ *  - a flat grid with in-plane noise comes back as itself up to a rigid
+ *    motion (Procrustes residual below 1e-6 of its size);
+ *  - a hemisphere: no flipped face; the strain is printed;
+ *  - grain: the 3D image of +v (the warp) follows the projected grain axis:
+ *    area-weighted mean angle below 1 degree (absolute on the cylinder with
+ *    the default +z grain, signed on the saddle with a +x grain);
+ *  - a closed cylinder (not a disk) and two panels sharing vertices are
+ *    refused with PZ_ERR_DATA;
+ *  - two panels of a rolled grid (10,000 faces: the parallel paths) joined
+ *    by a seam: isometric, seam sides equal and mirror images;
+ *  - the two skirt panels of ../shared/data/seams with their seams and darts
+ *    (in mm): seam sides equal in length within 0.5%, reflection residual
+ *    below 1 mm, dart legs equal within 0.5%, and with the seam term off the
+ *    seam residual is larger;
+ *  - the jumpsuit front in 3 poses: use_poses changes the pattern and its
+ *    worst per-pose RMS strain is no worse than the rest-pose-only pattern's.
+ * Patterns are built by hand (one panel = all faces) so the test does not
+ * depend on pz_pattern_build.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "param/param.h"
+#include "test_meshes.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static pz_ctx ctx;
+
+/* ------------------------------------------------------------------ helpers */
+
+/* A pattern owning `mesh`: one panel per component id given (NULL = all 0). */
+static pz_pattern *pattern_of(pz_mesh *mesh, const int32_t *face_panel, int32_t panel_count)
+{
+    pz_pattern *pattern = calloc(1, sizeof *pattern);
+    REQUIRE(pattern, "out of memory");
+    pattern->mesh = mesh;
+    pattern->panel_count = panel_count;
+    pattern->vertex_origin = malloc((size_t)mesh->vertex_count * sizeof(int32_t));
+    pattern->face_panel = calloc((size_t)mesh->face_count, sizeof(int32_t));
+    REQUIRE(pattern->vertex_origin && pattern->face_panel, "out of memory");
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        pattern->vertex_origin[v] = v;
+    if (face_panel)
+        memcpy(pattern->face_panel, face_panel, (size_t)mesh->face_count * sizeof(int32_t));
+    return pattern;
+}
+
+static void pattern_release(pz_pattern *pattern)
+{
+    for (int32_t s = 0; s < pattern->seam_count; ++s) {
+        free(pattern->seams[s].side_a);
+        free(pattern->seams[s].side_b);
+    }
+    for (int32_t d = 0; d < pattern->dart_count; ++d) {
+        free(pattern->darts[d].leg_a);
+        free(pattern->darts[d].leg_b);
+    }
+    free(pattern->seams);
+    free(pattern->darts);
+    free(pattern->face_panel);
+    free(pattern->vertex_origin);
+    pz_mesh_free(&pattern->mesh);
+    free(pattern);
+}
+
+static pz_mesh *generate(pz_shape shape, int32_t faces, int open)
+{
+    pz_generate_options options = {.target_faces = faces, .open = open};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_generate(shape, &options, &mesh, &ctx), ctx);
+    return mesh;
+}
+
+static double *flatten(const pz_pattern *pattern, const pz_textile_options *options, pz_textile_result *result)
+{
+    double *uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+    REQUIRE(uv, "out of memory");
+    REQUIRE_OK(pz_param_textile(pattern, options, uv, result, &ctx), ctx);
+    return uv;
+}
+
+static double signed_area2(const double *uv, const int32_t *face)
+{
+    const double *a = uv + 2 * face[0], *b = uv + 2 * face[1], *c = uv + 2 * face[2];
+    return 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+}
+
+static int count_flipped(const pz_mesh *mesh, const double *uv)
+{
+    int flipped = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        flipped += signed_area2(uv, mesh->faces + 3 * f) <= 0;
+    return flipped;
+}
+
+/* Worst relative edge-length error, positions = a pose (or the rest). */
+static double worst_edge_error(const pz_mesh *mesh, const double *positions, const double *uv)
+{
+    double worst = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            int32_t a = mesh->faces[3 * f + k], b = mesh->faces[3 * f + (k + 1) % 3];
+            const double *pa = positions + 3 * a, *pb = positions + 3 * b;
+            double l3 = sqrt((pa[0] - pb[0]) * (pa[0] - pb[0]) + (pa[1] - pb[1]) * (pa[1] - pb[1]) +
+                             (pa[2] - pb[2]) * (pa[2] - pb[2]));
+            double l2 = hypot(uv[2 * a] - uv[2 * b], uv[2 * a + 1] - uv[2 * b + 1]);
+            worst = fmax(worst, fabs(l2 - l3) / l3);
+        }
+    return worst;
+}
+
+/* The 3D images of the unit 2D axes on face f: J e_u and J e_v (Eq. 1). */
+static void tangents(const double *positions, const int32_t *face, const double *uv, double ju[3], double jv[3])
+{
+    double twice = 2 * signed_area2(uv, face);
+    for (int d = 0; d < 3; ++d)
+        ju[d] = jv[d] = 0;
+    for (int i = 0; i < 3; ++i) {
+        int j = (i + 1) % 3, k = (i + 2) % 3;
+        double cu = (uv[2 * face[j] + 1] - uv[2 * face[k] + 1]) / twice;
+        double cv = (uv[2 * face[k]] - uv[2 * face[j]]) / twice;
+        for (int d = 0; d < 3; ++d) {
+            ju[d] += cu * positions[3 * face[i] + d];
+            jv[d] += cv * positions[3 * face[i] + d];
+        }
+    }
+}
+
+/* Area-weighted RMS of the warp and weft strain (|J_1| - 1, |J_2| - 1) and
+ * its maximum, for one set of 3D positions. */
+static double rms_strain(const pz_mesh *mesh, const double *positions, const double *uv, double *max_strain)
+{
+    double sum = 0, area_sum = 0;
+    *max_strain = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const int32_t *face = mesh->faces + 3 * f;
+        double ju[3], jv[3];
+        tangents(positions, face, uv, ju, jv);
+        double su = sqrt(ju[0] * ju[0] + ju[1] * ju[1] + ju[2] * ju[2]) - 1;
+        double sv = sqrt(jv[0] * jv[0] + jv[1] * jv[1] + jv[2] * jv[2]) - 1;
+        double area = fabs(signed_area2(uv, face));
+        sum += area * (su * su + sv * sv) / 2;
+        area_sum += area;
+        *max_strain = fmax(*max_strain, fmax(fabs(su), fabs(sv)));
+    }
+    return sqrt(sum / area_sum);
+}
+
+/* Area-and-projection-weighted mean angle (degrees) between the warp J e_v
+ * and the grain projected onto each triangle; signed (about the normal) or
+ * absolute. */
+static double mean_grain_angle(const pz_mesh *mesh, const double *uv, const double grain[3], int absolute)
+{
+    double sum = 0, weight_sum = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const int32_t *face = mesh->faces + 3 * f;
+        const double *a = mesh->positions + 3 * face[0], *b = mesh->positions + 3 * face[1],
+                     *c = mesh->positions + 3 * face[2];
+        double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        double twice_area = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int d = 0; d < 3; ++d)
+            n[d] /= twice_area;
+        double gn = grain[0] * n[0] + grain[1] * n[1] + grain[2] * n[2];
+        double g[3] = {grain[0] - gn * n[0], grain[1] - gn * n[1], grain[2] - gn * n[2]};
+        double projected = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        if (projected < 1e-9)
+            continue;
+        double ju[3], jv[3];
+        tangents(mesh->positions, face, uv, ju, jv);
+        double cross[3] = {jv[1] * g[2] - jv[2] * g[1], jv[2] * g[0] - jv[0] * g[2], jv[0] * g[1] - jv[1] * g[0]};
+        double angle = atan2(cross[0] * n[0] + cross[1] * n[1] + cross[2] * n[2],
+                             jv[0] * g[0] + jv[1] * g[1] + jv[2] * g[2]) * 180 / TEST_PI;
+        double weight = 0.5 * twice_area * projected;
+        sum += weight * (absolute ? fabs(angle) : angle);
+        weight_sum += weight;
+    }
+    return sum / weight_sum;
+}
+
+/* ------------------------------------------------------------------ tests */
+
+static void test_developable(pz_shape shape)
+{
+    pz_pattern *pattern = pattern_of(generate(shape, 3000, 1), NULL, 1);
+    pz_textile_result result;
+    double *uv = flatten(pattern, NULL, &result);
+    double error = worst_edge_error(pattern->mesh, pattern->mesh->positions, uv);
+    int flipped = count_flipped(pattern->mesh, uv);
+    printf("%s: textile worst edge error %.3g, %d iterations, energy %.3g -> %.3g\n", pz_shape_name(shape), error,
+           result.iterations_run, result.initial_energy, result.final_energy);
+    CHECK(error < 1e-4, "%s: worst edge error %g", pz_shape_name(shape), error);
+    CHECK(flipped == 0, "%s: %d flipped faces", pz_shape_name(shape), flipped);
+    CHECK(result.final_energy <= result.initial_energy + 1e-9, "energy grew: %g -> %g", result.initial_energy,
+          result.final_energy);
+    if (shape == PZ_SHAPE_CYLINDER) {
+        double up[3] = {0, 0, 1};
+        double angle = mean_grain_angle(pattern->mesh, uv, up, 1);
+        printf("cylinder: mean |angle| warp to grain %.3g degrees\n", angle);
+        CHECK(angle < 1, "cylinder: warp is %g degrees off the grain", angle);
+    }
+    free(uv);
+    pattern_release(pattern);
+}
+
+/* Deterministic noise in [-1, 1]. */
+static double noise(uint32_t *state)
+{
+    *state = *state * 1664525u + 1013904223u;
+    return (*state >> 8) / (double)(1u << 24) * 2 - 1;
+}
+
+static void test_planar(void)
+{
+    const int columns = 30, rows = 20;
+    pz_mesh *mesh = test_grid(columns, rows, TEST_GRID_FLAT, 0, &ctx);
+    uint32_t seed = 12345;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+        mesh->positions[3 * v] = 10 * mesh->positions[3 * v] + 2 * noise(&seed);
+        mesh->positions[3 * v + 1] = 10 * mesh->positions[3 * v + 1] + 2 * noise(&seed);
+    }
+    pz_pattern *pattern = pattern_of(mesh, NULL, 1);
+    double *uv = flatten(pattern, NULL, NULL);
+    /* Best rigid motion (rotation only, no reflection) of uv onto (x, y). */
+    int32_t n = mesh->vertex_count;
+    double cu[2] = {0, 0}, cx[2] = {0, 0};
+    for (int32_t v = 0; v < n; ++v)
+        for (int k = 0; k < 2; ++k) {
+            cu[k] += uv[2 * v + k] / n;
+            cx[k] += mesh->positions[3 * v + k] / n;
+        }
+    double s00 = 0, s01 = 0, s10 = 0, s11 = 0;
+    for (int32_t v = 0; v < n; ++v) {
+        double px = uv[2 * v] - cu[0], py = uv[2 * v + 1] - cu[1];
+        double qx = mesh->positions[3 * v] - cx[0], qy = mesh->positions[3 * v + 1] - cx[1];
+        s00 += qx * px;
+        s01 += qx * py;
+        s10 += qy * px;
+        s11 += qy * py;
+    }
+    double c = s00 + s11, s = s10 - s01, norm = hypot(c, s);
+    c /= norm;
+    s /= norm;
+    double residual = 0;
+    for (int32_t v = 0; v < n; ++v) {
+        double px = uv[2 * v] - cu[0], py = uv[2 * v + 1] - cu[1];
+        double dx = c * px - s * py - (mesh->positions[3 * v] - cx[0]);
+        double dy = s * px + c * py - (mesh->positions[3 * v + 1] - cx[1]);
+        residual = fmax(residual, hypot(dx, dy));
+    }
+    double size = hypot(10 * columns, 10 * rows);
+    printf("planar: worst rigid residual %.3g mm (size %.0f mm)\n", residual, size);
+    CHECK(residual < 1e-6 * size, "planar: residual %g mm", residual);
+    free(uv);
+    pattern_release(pattern);
+}
+
+static void test_hemisphere(void)
+{
+    pz_pattern *pattern = pattern_of(generate(PZ_SHAPE_HEMISPHERE, 3000, 0), NULL, 1);
+    pz_textile_result result;
+    double *uv = flatten(pattern, NULL, &result);
+    int flipped = count_flipped(pattern->mesh, uv);
+    double max_strain, rms = rms_strain(pattern->mesh, pattern->mesh->positions, uv, &max_strain);
+    printf("hemisphere: %d flipped, strain rms %.4f max %.4f, worst edge error %.4f, %d iterations\n", flipped,
+           rms, max_strain, worst_edge_error(pattern->mesh, pattern->mesh->positions, uv), result.iterations_run);
+    CHECK(flipped == 0, "hemisphere: %d flipped faces", flipped);
+    /* The textile energy penalizes thread stretch: it must beat its LSCM start. */
+    REQUIRE_OK(pz_param_lscm_pattern(pattern, NULL, uv, &ctx), ctx);
+    double lscm_max, lscm_rms = rms_strain(pattern->mesh, pattern->mesh->positions, uv, &lscm_max);
+    printf("hemisphere: LSCM strain rms %.4f max %.4f\n", lscm_rms, lscm_max);
+    CHECK(rms < 0.8 * lscm_rms && max_strain < lscm_max, "hemisphere: textile strain rms %g max %g, LSCM %g %g", rms,
+          max_strain, lscm_rms, lscm_max);
+    free(uv);
+    pattern_release(pattern);
+}
+
+static void test_saddle_grain(void)
+{
+    pz_pattern *pattern = pattern_of(generate(PZ_SHAPE_SADDLE, 3000, 0), NULL, 1);
+    pz_textile_options options = {.grain_given = 1, .grain = {1, 0, 0}};
+    double *uv = flatten(pattern, &options, NULL);
+    double angle = mean_grain_angle(pattern->mesh, uv, options.grain, 0);
+    double spread = mean_grain_angle(pattern->mesh, uv, options.grain, 1);
+    printf("saddle, grain +x: mean signed angle %.3g degrees (mean |angle| %.3g)\n", angle, spread);
+    CHECK(fabs(angle) < 1, "saddle: warp is %g degrees off the grain on average", angle);
+    CHECK(count_flipped(pattern->mesh, uv) == 0, "saddle: flipped faces");
+    free(uv);
+    pattern_release(pattern);
+}
+
+/* ------------------------------------------------------------------ real data */
+
+static pz_mesh *read_mm(const char *dir, const char *name)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_read(path, &mesh, &ctx), ctx);
+    pz_units used;
+    pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, &used);
+    printf("%s: %d faces, units %s\n", name, mesh->face_count, pz_units_str(used));
+    return mesh;
+}
+
+/* Reads "a b" pairs after `header` leading lines; returns the pair count. */
+static int32_t read_pairs(const char *path, int header, int32_t head[2], int32_t **a, int32_t **b)
+{
+    FILE *file = fopen(path, "r");
+    REQUIRE(file, "cannot open %s", path);
+    for (int i = 0; i < header; ++i)
+        REQUIRE(fscanf(file, "%d", &head[i]) == 1, "%s: bad header", path);
+    int32_t count = 0, capacity = 256;
+    *a = malloc(capacity * sizeof(int32_t));
+    *b = malloc(capacity * sizeof(int32_t));
+    REQUIRE(*a && *b, "out of memory");
+    int x, y;
+    while (fscanf(file, "%d %d", &x, &y) == 2) {
+        REQUIRE(count < capacity, "%s: too many pairs", path);
+        (*a)[count] = x;
+        (*b)[count++] = y;
+    }
+    fclose(file);
+    return count;
+}
+
+static double polyline_length(const double *uv, const int32_t *ids, int32_t count)
+{
+    double length = 0;
+    for (int32_t i = 1; i < count; ++i)
+        length += hypot(uv[2 * ids[i]] - uv[2 * ids[i - 1]], uv[2 * ids[i] + 1] - uv[2 * ids[i - 1] + 1]);
+    return length;
+}
+
+/* RMS distance after the best-fit reflection of side a onto side b. */
+static double reflection_residual(const double *uv, const pz_seam *seam)
+{
+    int32_t n = seam->pair_count;
+    double ca[2] = {0, 0}, cb[2] = {0, 0};
+    for (int32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 2; ++k) {
+            ca[k] += uv[2 * seam->side_a[i] + k] / n;
+            cb[k] += uv[2 * seam->side_b[i] + k] / n;
+        }
+    double s00 = 0, s01 = 0, s10 = 0, s11 = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        double px = uv[2 * seam->side_a[i]] - ca[0], py = uv[2 * seam->side_a[i] + 1] - ca[1];
+        double qx = uv[2 * seam->side_b[i]] - cb[0], qy = uv[2 * seam->side_b[i] + 1] - cb[1];
+        s00 += qx * px;
+        s01 += qx * py;
+        s10 += qy * px;
+        s11 += qy * py;
+    }
+    double c = s00 - s11, s = s01 + s10, norm = hypot(c, s);
+    c /= norm;
+    s /= norm;
+    double sum = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        double px = uv[2 * seam->side_a[i]] - ca[0], py = uv[2 * seam->side_a[i] + 1] - ca[1];
+        double qx = uv[2 * seam->side_b[i]] - cb[0], qy = uv[2 * seam->side_b[i] + 1] - cb[1];
+        double dx = c * px + s * py - qx, dy = s * px - c * py - qy;
+        sum += dx * dx + dy * dy;
+    }
+    return sqrt(sum / n);
+}
+
+/* Relative difference of the two legs' summed distances to the tip, in
+ * `dimension` 2 (uv) or 3 (positions). */
+static double dart_leg_mismatch(const double *points, int dimension, const pz_dart *dart)
+{
+    double la = 0, lb = 0;
+    const double *tip = points + dimension * dart->tip;
+    for (int32_t i = 0; i < dart->pair_count; ++i) {
+        const double *a = points + dimension * dart->leg_a[i], *b = points + dimension * dart->leg_b[i];
+        double da = 0, db = 0;
+        for (int d = 0; d < dimension; ++d) {
+            da += (a[d] - tip[d]) * (a[d] - tip[d]);
+            db += (b[d] - tip[d]) * (b[d] - tip[d]);
+        }
+        la += sqrt(da);
+        lb += sqrt(db);
+    }
+    return fabs(la - lb) / fmax(la, lb);
+}
+
+/* The two skirt panels with their seams and darts as one pattern (mm), or
+ * NULL when the data is absent. `deform`: see test_skirt_seams. */
+static pz_pattern *skirt_pattern(const char *dir, int deform)
+{
+    pz_mesh *part[2] = {read_mm(dir, "skirt_0.obj"), read_mm(dir, "skirt_1.obj")};
+    int32_t offset[2] = {0, part[0]->vertex_count};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_create(part[0]->vertex_count + part[1]->vertex_count,
+                              part[0]->face_count + part[1]->face_count, &mesh, &ctx), ctx);
+    int32_t *face_panel = malloc((size_t)mesh->face_count * sizeof(int32_t));
+    REQUIRE(face_panel, "out of memory");
+    for (int p = 0, f0 = 0; p < 2; f0 += part[p]->face_count, ++p) {
+        memcpy(mesh->positions + 3 * offset[p], part[p]->positions, (size_t)part[p]->vertex_count * 3 * sizeof(double));
+        for (int32_t f = 0; f < part[p]->face_count; ++f) {
+            face_panel[f0 + f] = p;
+            for (int k = 0; k < 3; ++k)
+                mesh->faces[3 * (f0 + f) + k] = part[p]->faces[3 * f + k] + offset[p];
+        }
+    }
+    if (deform)
+        for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+            double *q = mesh->positions + 3 * v;
+            q[2] += 0.1 * q[0] + 0.0005 * q[0] * fabs(q[0]);
+        }
+    pz_pattern *pattern = pattern_of(mesh, face_panel, 2);
+    free(face_panel);
+    pattern->seams = calloc(2, sizeof(pz_seam));
+    pattern->darts = calloc(4, sizeof(pz_dart));
+    REQUIRE(pattern->seams && pattern->darts, "out of memory");
+    for (int s = 0; s < 2; ++s) {
+        char path[4200];
+        snprintf(path, sizeof path, "%s/seam%d.txt", dir, s);
+        int32_t head[2];
+        pz_seam *seam = &pattern->seams[pattern->seam_count++];
+        seam->pair_count = read_pairs(path, 2, head, &seam->side_a, &seam->side_b);
+        REQUIRE(head[0] >= 0 && head[0] < 2 && head[1] >= 0 && head[1] < 2, "%s: bad panel ids", path);
+        seam->panel_a = head[0];
+        seam->panel_b = head[1];
+        for (int32_t i = 0; i < seam->pair_count; ++i) {
+            seam->side_a[i] += offset[head[0]];
+            seam->side_b[i] += offset[head[1]];
+        }
+    }
+    for (int p = 0; p < 2; ++p)
+        for (int j = 0; j < 2; ++j) {
+            char path[4200];
+            snprintf(path, sizeof path, "%s/patch_%d_dart_%d.txt", dir, p, j);
+            int32_t head[2];
+            pz_dart *dart = &pattern->darts[pattern->dart_count++];
+            dart->pair_count = read_pairs(path, 1, head, &dart->leg_a, &dart->leg_b);
+            dart->panel = p;
+            dart->tip = head[0] + offset[p];
+            for (int32_t i = 0; i < dart->pair_count; ++i) {
+                dart->leg_a[i] += offset[p];
+                dart->leg_b[i] += offset[p];
+            }
+        }
+    pz_mesh_free(&part[0]);
+    pz_mesh_free(&part[1]);
+    return pattern;
+}
+
+typedef struct skirt_figures {
+    double seam_mismatch[2], seam_residual[2], dart_mismatch[4];
+    double worst_seam_mismatch, worst_seam_residual, worst_dart_mismatch, mean_dart_mismatch;
+    int flipped;
+} skirt_figures;
+
+static skirt_figures skirt_flatten(const pz_pattern *pattern, const char *label, double weight_seam,
+                                   double weight_dart)
+{
+    pz_textile_options options = {.weights_given = 1, .weight_stretch = 5, .weight_rigid = 1,
+                                  .weight_dart = weight_dart, .weight_seam = weight_seam};
+    pz_textile_result result;
+    double *uv = flatten(pattern, &options, &result);
+    skirt_figures figures;
+    memset(&figures, 0, sizeof figures);
+    figures.flipped = count_flipped(pattern->mesh, uv);
+    printf("skirt %s (seam %g, dart %g): %d iterations, energy %.4g -> %.4g, %d flipped\n", label, weight_seam,
+           weight_dart, result.iterations_run, result.initial_energy, result.final_energy, figures.flipped);
+    for (int s = 0; s < pattern->seam_count; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        double la = polyline_length(uv, seam->side_a, seam->pair_count);
+        double lb = polyline_length(uv, seam->side_b, seam->pair_count);
+        figures.seam_mismatch[s] = fabs(la - lb) / fmax(la, lb);
+        figures.seam_residual[s] = reflection_residual(uv, seam);
+        figures.worst_seam_mismatch = fmax(figures.worst_seam_mismatch, figures.seam_mismatch[s]);
+        figures.worst_seam_residual = fmax(figures.worst_seam_residual, figures.seam_residual[s]);
+        printf("  seam %d: %d pairs, sides %.2f / %.2f mm (mismatch %.4f%%), reflection residual %.3f mm\n", s,
+               seam->pair_count, la, lb, 100 * figures.seam_mismatch[s], figures.seam_residual[s]);
+    }
+    for (int d = 0; d < pattern->dart_count; ++d) {
+        figures.dart_mismatch[d] = dart_leg_mismatch(uv, 2, &pattern->darts[d]);
+        figures.worst_dart_mismatch = fmax(figures.worst_dart_mismatch, figures.dart_mismatch[d]);
+        figures.mean_dart_mismatch += figures.dart_mismatch[d] / pattern->dart_count;
+        printf("  dart %d: legs differ by %.4f%% (in 3D: %.4f%%)\n", d, 100 * figures.dart_mismatch[d],
+               100 * dart_leg_mismatch(pattern->mesh->positions, 3, &pattern->darts[d]));
+    }
+    free(uv);
+    return figures;
+}
+
+/*
+ * The skirt as given: seams within 0.5% and 1 mm, dart legs within 0.5%.
+ * The two panels are mirror images, so any mirror-symmetric flattening
+ * matches the seams: to show that the seam and dart terms do work, the same
+ * pattern is also bent by a deformation that is not mirror-symmetric (a
+ * function of position, so seam partners stay together), and flattened with
+ * the seam term or the dart term switched off.
+ */
+static void test_skirt_seams(void)
+{
+    const char *shared = test_shared_data();
+    char dir[4096];
+    if (!shared) {
+        printf("skirt seams: skipped (PZ_SHARED_DATA unset)\n");
+        return;
+    }
+    snprintf(dir, sizeof dir, "%s/seams", shared);
+    char probe[4200];
+    snprintf(probe, sizeof probe, "%s/skirt_0.obj", dir);
+    FILE *exists = fopen(probe, "r");
+    if (!exists) {
+        printf("skirt seams: skipped (%s missing)\n", probe);
+        return;
+    }
+    fclose(exists);
+    pz_pattern *pattern = skirt_pattern(dir, 0);
+    skirt_figures given = skirt_flatten(pattern, "as given", 5, 5);
+    CHECK(given.flipped == 0, "skirt: %d flipped faces", given.flipped);
+    CHECK(given.worst_seam_mismatch < 0.005, "skirt: seam sides differ by %g%%", 100 * given.worst_seam_mismatch);
+    CHECK(given.worst_seam_residual < 1, "skirt: seam reflection residual %g mm", given.worst_seam_residual);
+    CHECK(given.worst_dart_mismatch < 0.005, "skirt: dart legs differ by %g%%", 100 * given.worst_dart_mismatch);
+    pattern_release(pattern);
+
+    pattern = skirt_pattern(dir, 1);
+    skirt_figures bent = skirt_flatten(pattern, "bent", 5, 5);
+    skirt_figures no_seam = skirt_flatten(pattern, "bent", 0, 5);
+    skirt_figures no_dart = skirt_flatten(pattern, "bent", 5, 0);
+    CHECK(bent.flipped == 0, "bent skirt: %d flipped faces", bent.flipped);
+    CHECK(bent.worst_seam_mismatch < 0.005, "bent skirt: seam sides differ by %g%%", 100 * bent.worst_seam_mismatch);
+    CHECK(bent.worst_seam_residual < 1, "bent skirt: seam reflection residual %g mm", bent.worst_seam_residual);
+    for (int s = 0; s < 2; ++s)
+        CHECK(bent.seam_residual[s] < 0.5 * no_seam.seam_residual[s] &&
+                  bent.seam_mismatch[s] < 0.5 * no_seam.seam_mismatch[s],
+              "seam %d: the seam term does not help: residual %g vs %g mm, mismatch %g vs %g", s,
+              bent.seam_residual[s], no_seam.seam_residual[s], bent.seam_mismatch[s], no_seam.seam_mismatch[s]);
+    CHECK(bent.mean_dart_mismatch < 0.5 * no_dart.mean_dart_mismatch,
+          "the dart term does not help: legs differ by %g%% vs %g%%", 100 * bent.mean_dart_mismatch,
+          100 * no_dart.mean_dart_mismatch);
+    pattern_release(pattern);
+}
+
+static void test_multipose(void)
+{
+    const char *shared = test_shared_data();
+    if (!shared) {
+        printf("multi-pose: skipped (PZ_SHARED_DATA unset)\n");
+        return;
+    }
+    char paths[3][4200];
+    for (int i = 0; i < 3; ++i)
+        snprintf(paths[i], sizeof paths[i], "%s/multipose/jumpsuit/front%d.obj", shared, i + 1);
+    FILE *exists = fopen(paths[0], "r");
+    if (!exists) {
+        printf("multi-pose: skipped (%s missing)\n", paths[0]);
+        return;
+    }
+    fclose(exists);
+    const char *poses[2] = {paths[1], paths[2]};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_read_with_poses(paths[0], poses, 2, &mesh, &ctx), ctx);
+    pz_units used;
+    pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, &used);
+    REQUIRE(mesh->pose_count == 2, "expected 2 poses, got %d", mesh->pose_count);
+    pz_pattern *pattern = pattern_of(mesh, NULL, 1);
+    pz_textile_options rest_only = {0}, all = {.use_poses = 1};
+    double *uv_rest = flatten(pattern, &rest_only, NULL);
+    double *uv_all = flatten(pattern, &all, NULL);
+    double difference = 0;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        difference = fmax(difference, hypot(uv_rest[2 * v] - uv_all[2 * v], uv_rest[2 * v + 1] - uv_all[2 * v + 1]));
+    double worst_rest = 0, worst_all = 0;
+    for (int p = 0; p <= mesh->pose_count; ++p) {
+        const double *positions = p == 0 ? mesh->positions : mesh->poses + (size_t)(p - 1) * mesh->vertex_count * 3;
+        double max_rest, max_all;
+        double rest = rms_strain(mesh, positions, uv_rest, &max_rest);
+        double multi = rms_strain(mesh, positions, uv_all, &max_all);
+        printf("jumpsuit (%s) pose %d: strain rms %.5f (max %.4f) rest-only, %.5f (max %.4f) all poses\n",
+               pz_units_str(used), p, rest, max_rest, multi, max_all);
+        worst_rest = fmax(worst_rest, rest);
+        worst_all = fmax(worst_all, multi);
+    }
+    printf("jumpsuit: patterns differ by up to %.3f mm; worst pose rms strain %.5f rest-only, %.5f all poses; "
+           "flipped %d / %d\n", difference, worst_rest, worst_all, count_flipped(mesh, uv_rest),
+           count_flipped(mesh, uv_all));
+    CHECK(difference > 1e-3, "use_poses changes nothing (%g mm)", difference);
+    CHECK(worst_all <= worst_rest, "multi-pose worst strain %g > rest-only %g", worst_all, worst_rest);
+    free(uv_rest);
+    free(uv_all);
+    pattern_release(pattern);
+}
+
+/*
+ * Two panels joined by a seam, big enough (10,000 faces) for the parallel
+ * paths: a 100 x 50 grid of 5 mm squares, cut down the middle column (the
+ * right half gets copies of those vertices), then rolled onto a cylinder of
+ * radius 150 mm around the y axis (developable). Both pieces must come out
+ * isometric, the seam sides equal and mirror images.
+ */
+static void test_two_panels(void)
+{
+    const int columns = 100, rows = 50, middle = columns / 2;
+    pz_mesh *grid = test_grid(columns, rows, TEST_GRID_FLAT, 0, &ctx);
+    int32_t nv = grid->vertex_count, extra = rows + 1;
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_create(nv + extra, grid->face_count, &mesh, &ctx), ctx);
+    for (int32_t v = 0; v < nv + extra; ++v) {
+        int32_t source = v < nv ? v : (v - nv) * (columns + 1) + middle;
+        double x = 5 * grid->positions[3 * source], y = 5 * grid->positions[3 * source + 1];
+        double angle = x / 150;
+        mesh->positions[3 * v] = 150 * sin(angle);
+        mesh->positions[3 * v + 1] = y;
+        mesh->positions[3 * v + 2] = 150 * cos(angle);
+    }
+    int32_t *face_panel = malloc((size_t)grid->face_count * sizeof(int32_t));
+    REQUIRE(face_panel, "out of memory");
+    for (int32_t f = 0; f < grid->face_count; ++f) {
+        int column = (f / 2) % columns;
+        face_panel[f] = column >= middle;
+        for (int k = 0; k < 3; ++k) {
+            int32_t v = grid->faces[3 * f + k];
+            if (column >= middle && v % (columns + 1) == middle)
+                v = nv + v / (columns + 1);
+            mesh->faces[3 * f + k] = v;
+        }
+    }
+    pz_mesh_free(&grid);
+    pz_pattern *pattern = pattern_of(mesh, face_panel, 2);
+    free(face_panel);
+    pattern->seams = calloc(1, sizeof(pz_seam));
+    REQUIRE(pattern->seams, "out of memory");
+    pz_seam *seam = &pattern->seams[pattern->seam_count++];
+    seam->panel_a = 0;
+    seam->panel_b = 1;
+    seam->pair_count = rows + 1;
+    seam->side_a = malloc((size_t)extra * sizeof(int32_t));
+    seam->side_b = malloc((size_t)extra * sizeof(int32_t));
+    REQUIRE(seam->side_a && seam->side_b, "out of memory");
+    for (int j = 0; j <= rows; ++j) {
+        seam->side_a[j] = j * (columns + 1) + middle;
+        seam->side_b[j] = nv + j;
+    }
+    pz_textile_options options = {.threads = 2};
+    pz_textile_result result;
+    double *uv = flatten(pattern, &options, &result);
+    double error = worst_edge_error(mesh, mesh->positions, uv);
+    double la = polyline_length(uv, seam->side_a, seam->pair_count);
+    double lb = polyline_length(uv, seam->side_b, seam->pair_count);
+    double residual = reflection_residual(uv, seam);
+    printf("two panels: worst edge error %.3g, %d flipped, seam %.3f / %.3f mm, reflection residual %.3g mm\n",
+           error, count_flipped(mesh, uv), la, lb, residual);
+    CHECK(error < 1e-4, "two panels: worst edge error %g", error);
+    CHECK(count_flipped(mesh, uv) == 0, "two panels: flipped faces");
+    CHECK(fabs(la - lb) < 1e-4 * la && fabs(la - 5 * rows) < 1e-3, "two panels: seam sides %g / %g mm", la, lb);
+    CHECK(residual < 1e-3, "two panels: reflection residual %g mm", residual);
+    free(uv);
+    pattern_release(pattern);
+}
+
+static void test_bad_input(void)
+{
+    pz_pattern *pattern = pattern_of(generate(PZ_SHAPE_CYLINDER, 1000, 0), NULL, 1); /* closed: not a disk */
+    double *uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+    REQUIRE(uv, "out of memory");
+    pz_status status = pz_param_textile(pattern, NULL, uv, NULL, &ctx);
+    CHECK(status == PZ_ERR_DATA, "closed cylinder: status %d", status);
+    CHECK(strstr(ctx.error, "panel 0") != NULL, "message does not name the panel: %s", ctx.error);
+    /* Two panels sharing vertices: the mesh was not cut between them. */
+    pattern->panel_count = 2;
+    for (int32_t f = pattern->mesh->face_count / 2; f < pattern->mesh->face_count; ++f)
+        pattern->face_panel[f] = 1;
+    status = pz_param_textile(pattern, NULL, uv, NULL, &ctx);
+    CHECK(status == PZ_ERR_DATA && strstr(ctx.error, "not cut"), "uncut panels: status %d: %s", status, ctx.error);
+    free(uv);
+    pattern_release(pattern);
+}
+
+int main(void)
+{
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    test_developable(PZ_SHAPE_CYLINDER);
+    test_developable(PZ_SHAPE_CONE);
+    test_planar();
+    test_hemisphere();
+    test_saddle_grain();
+    test_bad_input();
+    test_two_panels();
+    test_skirt_seams();
+    test_multipose();
+    return test_finish();
+}
