@@ -114,6 +114,16 @@ void pz_mesh_bbox(const pz_mesh *mesh, double bbox_min[3], double bbox_max[3])
         }
 }
 
+void pz_mesh_vertical_axis(const pz_mesh *mesh, double axis[3])
+{
+    double lo[3], hi[3];
+    pz_mesh_bbox(mesh, lo, hi);
+    int y_up = hi[1] - lo[1] > hi[2] - lo[2];
+    axis[0] = 0.0;
+    axis[1] = y_up ? 1.0 : 0.0;
+    axis[2] = y_up ? 0.0 : 1.0;
+}
+
 const char *pz_units_str(pz_units units)
 {
     switch (units) {

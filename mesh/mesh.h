@@ -163,6 +163,15 @@ pz_status pz_mesh_copy(const pz_mesh *mesh, pz_mesh **out, pz_ctx *ctx);
 /** Axis-aligned bounding box of the rest pose: bbox_min[3], bbox_max[3]. Zeros for an empty mesh. */
 void pz_mesh_bbox(const pz_mesh *mesh, double bbox_min[3], double bbox_max[3]);
 
+/**
+ * The garment's vertical (its "up", the default grain axis): +y or +z,
+ * whichever the rest pose's bounding box is taller along. Tools disagree on
+ * the up axis (glTF, CLO3D and Blender's OBJ export use y, scanners and CAD
+ * often z), and no common tool uses x; a garment is taller than it is deep,
+ * while arms spread sideways make x unreliable. Writes a unit vector.
+ */
+void pz_mesh_vertical_axis(const pz_mesh *mesh, double axis[3]);
+
 /** Length units a file may be in. */
 typedef enum pz_units {
     PZ_UNITS_AUTO = 0,
