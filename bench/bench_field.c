@@ -28,23 +28,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-/* A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1. */
-static long status_kb(const char *name)
-{
-    FILE *file = fopen("/proc/self/status", "r");
-    if (!file)
-        return -1;
-    char line[256];
-    long value = -1;
-    size_t length = strlen(name);
-    while (fgets(line, sizeof line, file))
-        if (strncmp(line, name, length) == 0 && line[length] == ':') {
-            value = strtol(line + length + 1, NULL, 10);
-            break;
-        }
-    fclose(file);
-    return value;
-}
+#include "bench_util.h"
 
 static int measure(int32_t target_faces)
 {
@@ -60,11 +44,11 @@ static int measure(int32_t target_faces)
         pz_mesh_free(&mesh);
         return 1;
     }
-    long before_kb = status_kb("VmRSS");
+    long before_kb = bench_status_kb("VmRSS");
     double start = pz_seconds();
     pz_status status = pz_field_compute(mesh, topology, NULL, &field, &ctx);
     double total_ms = 1e3 * (pz_seconds() - start);
-    long peak_kb = status_kb("VmHWM");
+    long peak_kb = bench_status_kb("VmHWM");
     if (status) {
         fprintf(stderr, "bench_field: %s\n", ctx.error);
     } else {

@@ -32,23 +32,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-/* A field of /proc/self/status in kB ("VmHWM", "VmRSS"), or -1. */
-static long status_kb(const char *field)
-{
-    FILE *file = fopen("/proc/self/status", "r");
-    if (!file)
-        return -1;
-    char line[256];
-    long value = -1;
-    size_t length = strlen(field);
-    while (fgets(line, sizeof line, file))
-        if (strncmp(line, field, length) == 0 && line[length] == ':') {
-            value = strtol(line + length + 1, NULL, 10);
-            break;
-        }
-    fclose(file);
-    return value;
-}
+#include "bench_util.h"
 
 static int fail(const char *step, const pz_ctx *ctx)
 {
@@ -62,7 +46,7 @@ static int measure(const char *path)
     pz_ctx ctx;
     pz_ctx_init(&ctx);
     ctx.quiet = 1;
-    long baseline_kb = status_kb("VmHWM");
+    long baseline_kb = bench_status_kb("VmHWM");
     pz_mesh *mesh = NULL;
     pz_topology *topology = NULL;
     pz_topology_summary summary;
@@ -79,7 +63,7 @@ static int measure(const char *path)
     if (pz_topology_summarize(topology, &summary, &ctx))
         return fail("summarize", &ctx);
     double summarize_done = pz_seconds();
-    long peak_kb = status_kb("VmHWM");
+    long peak_kb = bench_status_kb("VmHWM");
     const char *extension = strrchr(path, '.');
     printf("bench_load format=%s faces=%d vertices=%d read_s=%.3f validate_s=%.3f topology_s=%.3f "
            "summarize_s=%.3f total_s=%.3f peak_bytes_per_face=%.0f genus=%d boundary_loops=%d\n",

@@ -6,7 +6,12 @@
  * parameterization (20 iterations, no early stop) and LSCM, and prints one
  * line per run:
  *   bench_param mesh=... backend=textile faces=... init_ms=... iteration_ms=...
- *               total_ms=... peak_bytes_per_face=...
+ *               total_ms=... iterations=... damped=... peak_bytes_per_face=... load=...
+ * iterations counts the global steps run (the textile iteration stops early
+ * when a step cannot lower the energy: docs/param.md, "Monotone steps"),
+ * damped those that were backtracked, load is the 1-minute load average
+ * (/proc/loadavg) when the run ended: with 2 cores, figures taken at a load
+ * above 1 are not comparable.
  * peak_bytes_per_face is the growth of the process's peak resident size
  * (getrusage) during the run divided by the face count; runs go from small
  * to large so each one can raise the peak (0 means it stayed below an
@@ -21,6 +26,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+
+#include "bench_util.h"
 
 static long peak_kb(void)
 {
@@ -55,9 +62,9 @@ static int run(const char *name, pz_mesh *mesh)
     double total = 1e3 * (pz_seconds() - start);
     long after = peak_kb();
     printf("bench_param mesh=%s backend=textile faces=%d init_ms=%.1f iteration_ms=%.2f total_ms=%.1f "
-           "peak_bytes_per_face=%.0f\n",
-           name, mesh->face_count, result.init_ms, result.iteration_ms, total,
-           1024.0 * (double)(after - before) / mesh->face_count);
+           "iterations=%d damped=%d peak_bytes_per_face=%.0f load=%.2f\n",
+           name, mesh->face_count, result.init_ms, result.iteration_ms, total, result.iterations_run,
+           result.damped_steps, 1024.0 * (double)(after - before) / mesh->face_count, bench_load_average());
     before = after;
     start = pz_seconds();
     if (pz_param_lscm_pattern(&pattern, NULL, uv, &ctx)) {
@@ -66,8 +73,9 @@ static int run(const char *name, pz_mesh *mesh)
     }
     total = 1e3 * (pz_seconds() - start);
     printf("bench_param mesh=%s backend=lscm faces=%d init_ms=%.1f iteration_ms=0 total_ms=%.1f "
-           "peak_bytes_per_face=%.0f\n",
-           name, mesh->face_count, total, total, 1024.0 * (double)(peak_kb() - before) / mesh->face_count);
+           "peak_bytes_per_face=%.0f load=%.2f\n",
+           name, mesh->face_count, total, total, 1024.0 * (double)(peak_kb() - before) / mesh->face_count,
+           bench_load_average());
     fflush(stdout);
     free(uv);
     free(pattern.face_panel);

@@ -261,6 +261,13 @@ typedef enum pz_repair_flags {
  */
 pz_status pz_mesh_prepare(pz_mesh *mesh, const char *path, unsigned repair_flags, pz_ctx *ctx);
 
+/**
+ * Removes the faces with drop[f] != 0 in place, keeping the order of the
+ * others with their corner UVs and labels. Vertices stay (drop them with
+ * pz_mesh_drop_unreferenced). Returns the number of faces removed.
+ */
+int32_t pz_mesh_drop_faces(pz_mesh *mesh, const uint8_t *drop);
+
 /** Removes vertices that no face references, renumbering faces. Writes the count removed to *removed (may be NULL). */
 pz_status pz_mesh_drop_unreferenced(pz_mesh *mesh, int32_t *removed, pz_ctx *ctx);
 
@@ -473,6 +480,94 @@ pz_status pz_obj_write_file(const pz_mesh *mesh, FILE *file, pz_ctx *ctx);
 pz_status pz_ply_write_file(const pz_mesh *mesh, FILE *file, pz_ctx *ctx);
 /** GLB writer: path is the final file; writes atomically itself. */
 pz_status pz_glb_write(const pz_mesh *mesh, const char *path, const pz_write_options *options, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Preparation (scan-ready input): mesh/prepare.c, docs/prepare.md           */
+/* ------------------------------------------------------------------------ */
+
+/** What to do with the connected components left after repair. */
+typedef enum pz_prepare_keep {
+    PZ_PREPARE_KEEP_LARGEST = 0,  /* drop fragments under fragment_fraction of the area (default) */
+    PZ_PREPARE_KEEP_ALL           /* keep every component as a garment part */
+} pz_prepare_keep;
+
+/** Options of pz_prepare. Zero = defaults. Lengths in mm (the mesh is in mm). */
+typedef struct pz_prepare_options {
+    double weld_distance;      /* weld vertices closer than this; 0 = 0.01 mm; < 0 = no welding */
+    double target_edge;        /* remeshing edge length; 0 = from target_faces */
+    int32_t target_faces;      /* faces wanted when target_edge is 0; 0 = 20000 */
+    pz_prepare_keep keep;
+    double fragment_fraction;  /* 0 = 0.01 (1% of the total area) */
+    int iterations;            /* remeshing rounds; 0 = 5 */
+    int automatic;             /* 1: run decimation and remeshing only when the mesh needs them */
+    int no_remesh;             /* 1: never decimate or remesh (weld and repair only) */
+    const char *name;          /* the input's name for messages; NULL = "mesh" */
+} pz_prepare_options;
+
+/** The steps, in the order they run (pz_prepare_report.steps). */
+typedef enum pz_prepare_step_id {
+    PZ_PREPARE_WELD = 0, PZ_PREPARE_REPAIR, PZ_PREPARE_FRAGMENTS, PZ_PREPARE_DECIMATE,
+    PZ_PREPARE_REMESH, PZ_PREPARE_POSES, PZ_PREPARE_HAUSDORFF, PZ_PREPARE_STEP_COUNT
+} pz_prepare_step_id;
+
+typedef struct pz_prepare_step {
+    const char *name;    /* "weld", "repair", "fragments", "decimate", "remesh", "poses", "hausdorff" */
+    int ran;             /* 1 when the step changed or measured something */
+    char detail[256];    /* one line: the counts, or why the step did not run */
+    double seconds;
+} pz_prepare_step;
+
+/** Counts and figures of one preparation. */
+typedef struct pz_prepare_report {
+    pz_prepare_step steps[PZ_PREPARE_STEP_COUNT];
+    int32_t input_vertices, input_faces;
+    int32_t welded_vertices;         /* vertices merged into another by welding */
+    int32_t seam_edges;              /* welded edges (between two formerly separate faces) */
+    int32_t nonfinite_faces;         /* faces dropped for a NaN/Inf corner */
+    int32_t degenerate_faces, duplicate_faces;
+    int32_t nonmanifold_edge_faces;  /* faces dropped beyond the first two on an edge */
+    int32_t split_vertices;          /* copies made to split non-manifold vertices */
+    int32_t flipped_faces;
+    int32_t components, dropped_components, dropped_component_faces;
+    int32_t decimated_faces;         /* faces after decimation; 0 when it did not run */
+    double target_edge;              /* mm; 0 when remeshing did not run */
+    int32_t output_vertices, output_faces;
+    double bbox_diagonal;            /* of the repaired rest input, mm */
+    double hausdorff;                /* symmetric sampled Hausdorff distance, rest pose, mm (0 when unchanged) */
+    double hausdorff_bound;          /* 0.005 x bbox_diagonal */
+    double pose_hausdorff_max;       /* largest over the extra poses (each against its own input pose) */
+    int within_bound;                /* 1 when every Hausdorff distance is under the bound */
+    double min_angle_over_20_fraction; /* fraction of output faces whose smallest angle exceeds 20 degrees */
+} pz_prepare_report;
+
+/** A prepared mesh, its seams as polylines of its vertices, and the report. */
+typedef struct pz_prepare_result {
+    pz_mesh *mesh;            /* manifold, oriented; poses and labels carried over, UVs dropped when remeshed */
+    int32_t seam_count;
+    int32_t *seam_offsets;    /* seam_count + 1 */
+    int32_t *seam_vertices;   /* polyline i: seam_vertices[seam_offsets[i] .. seam_offsets[i+1]-1] (closed: last == first) */
+    pz_prepare_report report;
+} pz_prepare_result;
+
+/**
+ * Makes a scan or an export ready for the field, tracing and flattening:
+ * weld, repair, drop fragments, decimate huge inputs, remesh isotropically
+ * (boundaries and welded seams kept), carry the poses over and measure the
+ * Hausdorff distance to the repaired input. `mesh` (in mm) is not changed.
+ * Errors: PZ_ERR_INVALID_MESH when nothing is left after repair or a
+ * component is not orientable; PZ_ERR_USAGE for a target edge too long for
+ * the garment. Notes each step through pz_note.
+ */
+pz_status pz_prepare(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out, pz_ctx *ctx);
+
+/** pz_prepare with options->automatic set: what `panelize run --prepare auto` calls. */
+pz_status pz_prepare_auto(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out,
+                          pz_ctx *ctx);
+
+void pz_prepare_result_free(pz_prepare_result **result);
+
+/** Writes the seams as a sketch file {"curves": [[[x,y,z], ...], ...]} (mm), atomically. */
+pz_status pz_prepare_write_seams(const pz_prepare_result *result, const char *path, pz_ctx *ctx);
 
 /* ------------------------------------------------------------------------ */
 /* Synthetic garments and surfaces                                            */

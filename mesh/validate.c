@@ -514,8 +514,7 @@ pz_status pz_mesh_drop_unreferenced(pz_mesh *mesh, int32_t *removed, pz_ctx *ctx
     return PZ_OK;
 }
 
-/* Removes the faces with drop[f] != 0, keeping the order of the others. */
-static int32_t drop_faces(pz_mesh *mesh, const uint8_t *drop)
+int32_t pz_mesh_drop_faces(pz_mesh *mesh, const uint8_t *drop)
 {
     int32_t kept = 0;
     for (int32_t f = 0; f < mesh->face_count; ++f) {
@@ -554,7 +553,7 @@ static pz_status drop_flagged_faces(pz_mesh *mesh, const char *path, unsigned re
         duplicate += drop_duplicate && !drop_degenerate;
         face_flags[f] = (uint8_t)(drop_degenerate || drop_duplicate);
     }
-    drop_faces(mesh, face_flags);
+    pz_mesh_drop_faces(mesh, face_flags);
     free(face_flags);
     if (degenerate)
         pz_note(ctx, "%s: dropped %d degenerate %s", path, (int)degenerate, plural(degenerate, "face", "faces"));

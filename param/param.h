@@ -101,7 +101,9 @@ void pz_correspondences_clear(pz_correspondences *correspondences);
  *    0 is PZ_ERR_DATA naming the panel;
  *  - seams are found automatically: maximal chains of cut edges between the
  *    same two panels (or a panel and itself), oriented and paired vertex by
- *    vertex; `explicit` (may be NULL) adds or replaces correspondences
+ *    vertex; a self-chain that ends inside its panel (a slit, one copy at
+ *    its tip: the darts of a UV pattern) becomes a pz_dart instead;
+ *    `explicit` (may be NULL) adds or replaces correspondences
  *    (garment vertex ids; a seam whose vertices are not on a cut is
  *    PZ_ERR_DATA).
  * `path` names the input in error messages. Panel ids must be 0..K-1 with
@@ -148,6 +150,10 @@ typedef struct pz_textile_options {
     double grain[3];          /* 3D warp axis */
     int use_poses;            /* 1: average the right-hand sides over the rest pose and every pose */
     int threads;              /* OpenMP threads; 0 = default */
+    /* Called (may be NULL) with the energy (Eq. 10) of the start (iteration 0)
+     * and of every accepted iterate: non-increasing (docs/param.md). */
+    void (*on_iteration)(void *user, int iteration, double energy);
+    void *user;
 } pz_textile_options;
 
 /** Outcomes that are not errors. */
@@ -159,6 +165,7 @@ typedef struct pz_textile_result {
     double init_ms;           /* LSCM initialization */
     double solve_ms;          /* all iterations */
     double iteration_ms;      /* mean per iteration */
+    int damped_steps;         /* global steps shortened (backtracked) to keep the energy from rising or faces from flipping */
 } pz_textile_result;
 
 /**
@@ -174,6 +181,85 @@ pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *
 
 /** LSCM only, panel by panel (the `--backend lscm` path), grain-oriented. */
 pz_status pz_param_lscm_pattern(const pz_pattern *pattern, const double grain[3], double *uv, pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* WireWarping (wang2008): length-exact seams; docs/wirewarp.md              */
+/* ------------------------------------------------------------------------ */
+
+typedef enum pz_feature_kind {
+    PZ_FEATURE_ACCESSORY = 0,  /* length kept, 2D shape optimized */
+    PZ_FEATURE_KEY = 1         /* length kept, 2D angles fixed by Eq. 1 */
+} pz_feature_kind;
+
+/** A feature curve on the cut mesh: consecutive vertices share a mesh edge. */
+typedef struct pz_feature_curve {
+    pz_feature_kind kind;
+    int32_t vertex_count;
+    int32_t *vertices;         /* cut-mesh vertices (pattern->mesh) */
+} pz_feature_curve;
+
+typedef struct pz_feature_curves {
+    int32_t curve_count;
+    pz_feature_curve *curves;
+} pz_feature_curves;
+
+void pz_feature_curves_free(pz_feature_curves **curves);
+
+/** A 3D polyline as read from a features file (points: point_count x 3, mm). */
+typedef struct pz_feature_polyline {
+    pz_feature_kind kind;
+    int32_t point_count;
+    const double *points;
+} pz_feature_polyline;
+
+/**
+ * Snaps polylines to mesh edges: every point goes to its nearest cut-mesh
+ * vertex, consecutive vertices are joined by the shortest edge path (Dijkstra,
+ * 3D lengths) inside one panel. tolerance_mm: farthest a point may lie from
+ * its vertex (0 = twice the mean edge length). PZ_ERR_DATA naming the curve
+ * and point for a point off the mesh or a curve crossing panels.
+ */
+pz_status pz_feature_curves_snap(const pz_pattern *pattern, const pz_feature_polyline *polylines,
+                                 int32_t polyline_count, double tolerance_mm, pz_feature_curves **out,
+                                 pz_ctx *ctx);
+
+typedef struct pz_wirewarp_options {
+    int scheme;              /* 0 global (Sec. 4, default), 1 progressive (Sec. 3) */
+    int interior;            /* 0 cotangent Laplacian (default), 1 the paper's 1/length weights (Eq. 11) */
+    int max_iterations;      /* Newton iterations per solve; 0 = 100 */
+    int grain_given;         /* 1: use `grain`; 0 = +z. Each piece is turned so the grain runs along +v */
+    double grain[3];
+} pz_wirewarp_options;
+
+typedef struct pz_wirewarp_result {
+    int32_t wire_patch_count, wire_node_count, wire_edge_count;
+    int32_t locked_count;        /* wire-nodes with angles fixed by key curves (Eq. 1) or Eq. 9 */
+    int32_t constraint_count;    /* 3m + r of the global system (progressive: summed over patches) */
+    int iterations;              /* Newton iterations (summed over patches for progressive) */
+    double constraint_residual;  /* worst closure (relative to perimeter) or angle-sum (rad) residual */
+    double e_len_wires;          /* Eq. 26 over every wire edge (boundaries and feature curves) */
+    double max_wire_error;       /* worst relative wire-edge length error */
+    int best_effort;             /* 1: the constraints could not all be met (incompatible keys, Figs. 13-14) */
+    int interior_fallback;       /* 1: Gauss-Seidel (Eq. 12) replaced the direct solve */
+    int interior_inverse_length; /* 1: the interior uses Eq. 11's 1/length weights (asked, or the
+                                    cotangent solve flipped faces and these flipped fewer) */
+    int injective;               /* pz_metrics_compute: no flipped face, no boundary crossing */
+    int32_t flipped_triangles;
+    double angle_ms, layout_ms, interior_ms;
+} pz_wirewarp_result;
+
+/**
+ * WireWarping of every panel: wires are the panel boundaries plus `features`
+ * (may be NULL); wire-patches are warped in angle space so that every wire
+ * edge keeps its 3D length, then interior vertices solve a Laplacian with
+ * the wires fixed. uv: pattern->mesh->vertex_count x 2, written (mm).
+ * options and result may be NULL. A best-effort result (result->best_effort)
+ * is still PZ_OK; structural problems (a wire-patch that is not a disk, a
+ * feature curve whose consecutive vertices share no edge) are PZ_ERR_DATA.
+ */
+pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options *options,
+                            const pz_feature_curves *features, double *uv, pz_wirewarp_result *result,
+                            pz_ctx *ctx);
 
 /* ------------------------------------------------------------------------ */
 /* Metrics                                                                   */
@@ -256,6 +342,81 @@ void pz_metrics_free(pz_metrics **metrics);
  */
 void pz_metrics_triangle_strain(const double p3[3][3], const double p2[3][2], double *strain_warp,
                                 double *strain_weft, double *shear_deg);
+
+/* ------------------------------------------------------------------------ */
+/* Spring-mass (wang2002, mccartney2005, IISERM; docs/springmass.md)         */
+/* ------------------------------------------------------------------------ */
+
+/** Spring-mass options. Zero-initialized = defaults. */
+typedef struct pz_springmass_options {
+    int relax;               /* phase-one release: 0 heap (IISERM, default), 1 full (wang2002 InitFlatten) */
+    int heap_paths;          /* heap: 0 or 1 = single path; k >= 2 = multi-path, 2^(level-2) paths capped at k */
+    int orthotropic;         /* 1: mccartney2005 warp/weft/shear energy (fabric) instead of isotropic springs */
+    pz_fabric fabric;        /* zero = the paper's constants */
+    int grain_given;         /* 1: use `grain`; 0 = +z */
+    double grain[3];         /* 3D warp axis; the seed triangle's warp (+v) follows it */
+    int max_iterations;      /* phase two cap N; 0 = 1000 (wang2002 Sec. 6.2) */
+    int phase_one_iterations; /* full release cap after each triangle; 0 = 50 (wang2002 InitFlatten) */
+    double accuracy;         /* E_S and E_C target of phase two; 0 = 0.01 */
+    double energy_variation; /* relative energy change that stops a release; 0 = 0.0005 */
+    int trial_cut;           /* 1: cut each panel along its suggested line, re-flatten, classify dart/gusset */
+} pz_springmass_options;
+
+typedef enum pz_springmass_stop {
+    PZ_SPRINGMASS_STOP_ACCURACY = 1,   /* E_S and E_C below the accuracy */
+    PZ_SPRINGMASS_STOP_VARIATION = 2,  /* energy changed less than energy_variation */
+    PZ_SPRINGMASS_STOP_ITERATIONS = 3  /* max_iterations reached */
+} pz_springmass_stop;
+
+typedef enum pz_seam_kind {
+    PZ_SEAM_KIND_NONE = 0,     /* sides neither splay nor overlap measurably */
+    PZ_SEAM_KIND_DART = 1,     /* sides splay apart (elliptic: close with a dart) */
+    PZ_SEAM_KIND_GUSSET = 2    /* sides overlap (hyperbolic: insert a gusset) */
+} pz_seam_kind;
+
+/** Per panel: the suggested cutting line and what happens when it is cut. */
+typedef struct pz_springmass_panel {
+    int32_t panel;
+    int stop;                   /* pz_springmass_stop of phase two */
+    int iterations;             /* phase-two sweeps */
+    double phase_one_energy;    /* E(Phi) (Eq. 3) after phase one */
+    double final_energy;        /* E(Phi) at the end */
+    double e_area, e_shape;     /* wang2002 Eqs. 4 and 6 at the end */
+    int32_t max_energy_vertex;  /* cut-mesh vertex of the highest energy */
+    int32_t cut_vertex_count;
+    int32_t *cut_vertices;      /* crest line (Sec. 6.3): cut-mesh vertices from the boundary inward (owned) */
+    pz_seam_kind cut_kind;      /* trial_cut only */
+    double cut_opening_mm2;     /* trial_cut: area between the cut's sides, > 0 gap (dart), < 0 overlap (gusset) */
+    double cut_energy;          /* trial_cut: final energy of the panel cut open */
+} pz_springmass_panel;
+
+typedef struct pz_springmass_result {
+    int32_t vertex_count;
+    double *vertex_energy;      /* vertex_count (cut mesh): the energy map (owned) */
+    int32_t panel_count;
+    pz_springmass_panel *panels; /* owned */
+    double phase_one_energy, final_energy;  /* sums over panels */
+    long long node_relaxations;      /* node moves, all phases: a deterministic work counter */
+    long long phase_one_relaxations; /* of which during phase one */
+    long long energy_evaluations;    /* node energy evaluations */
+    double phase_one_ms, phase_two_ms;
+} pz_springmass_result;
+
+/**
+ * Spring-mass flattening of every panel (seams are not coupled): phase one
+ * lays triangles one by one from the seed (largest medial distance),
+ * releasing energy after each constrained triangle (heap or full), phase two
+ * releases the whole system until the stopping rules of wang2002 Sec. 5.
+ * uv: pattern->mesh->vertex_count x 2, written (mm). result may be NULL;
+ * otherwise it is filled and must be released with pz_springmass_result_clear.
+ */
+pz_status pz_param_springmass(const pz_pattern *pattern, const pz_springmass_options *options, double *uv,
+                              pz_springmass_result *result, pz_ctx *ctx);
+void pz_springmass_result_clear(pz_springmass_result *result);
+
+/** energy.svg: the flattened panels coloured by vertex energy, with the cutting lines. Atomic. */
+pz_status pz_springmass_write_energy_svg(const pz_pattern *pattern, const double *uv,
+                                         const pz_springmass_result *result, const char *path, pz_ctx *ctx);
 
 #ifdef __cplusplus
 }

@@ -31,7 +31,10 @@
  *     changes. Side A is the side of the lower panel id (for a self-seam:
  *     the half-edge running along the chain); the chain runs in the
  *     direction of side A's half-edges (panel_a on the left). A closed chain
- *     (a ring seam) repeats its first pair at the end.
+ *     (a ring seam) repeats its first pair at the end. A self-chain with
+ *     exactly one end where both sides share one copy (a slit stopping
+ *     inside its panel: the darts of a UV pattern) becomes a dart instead,
+ *     tip = that copy, legs from the open end towards it.
  *  6. Explicit correspondences (garment vertex ids) are mapped to copies:
  *     a seam whose pairs name the same vertex lies on a cut and takes the
  *     copies on the two sides of its cut edges (those edges leave the
@@ -116,6 +119,7 @@ typedef struct builder {
     size_t seam_capacity;
     pz_dart *darts;
     int32_t dart_count;
+    size_t dart_capacity;
 } builder;
 
 static pz_status no_memory(builder *b, pz_ctx *ctx)
@@ -747,8 +751,38 @@ static pz_status pair_chain(builder *b, const int32_t *chain_edges, int32_t edge
     return append_seam(b, &seam, ctx);
 }
 
+/*
+ * A self-seam with exactly one end where its two sides share one copy of the
+ * vertex is a slit ending inside its panel: a dart, sewn in 3D and open in
+ * the pattern (the skirt's UV islands carry two each). It becomes a pz_dart:
+ * the tip is that shared copy, the legs run from the open end towards it.
+ * Seams opening a tube or joining loops end on the boundary at both ends
+ * (two copies each) and stay seams. Moves the last seam into the darts.
+ */
+static pz_status seam_to_dart_if_slit(builder *b, pz_ctx *ctx)
+{
+    pz_seam *seam = &b->seams[b->seam_count - 1];
+    int32_t last = seam->pair_count - 1;
+    int tip_first = seam->side_a[0] == seam->side_b[0], tip_last = seam->side_a[last] == seam->side_b[last];
+    if (seam->panel_a != seam->panel_b || last < 1 || tip_first == tip_last)
+        return PZ_OK;
+    if (!pz_grow((void **)&b->darts, &b->dart_capacity, (size_t)b->dart_count + 1, sizeof(pz_dart)))
+        return no_memory(b, ctx);
+    if (tip_first)
+        reverse_pairs(seam);
+    pz_dart *dart = &b->darts[b->dart_count++];
+    dart->panel = seam->panel_a;
+    dart->tip = seam->side_a[last];
+    dart->pair_count = last;
+    dart->leg_a = seam->side_a;
+    dart->leg_b = seam->side_b;
+    --b->seam_count;
+    return PZ_OK;
+}
+
 static pz_status find_automatic_seams(builder *b, pz_ctx *ctx)
 {
+    b->dart_capacity = (size_t)b->dart_count; /* the explicit darts' array is exactly that long */
     int32_t edge_count = b->topology->edge_count;
     uint8_t *visited = calloc((size_t)edge_count + 1, 1);
     int32_t *chain_edges = malloc((size_t)edge_count * sizeof(int32_t) + 1);
@@ -759,6 +793,8 @@ static pz_status find_automatic_seams(builder *b, pz_ctx *ctx)
         if (is_seam_edge(b, e) && !visited[e]) {
             int32_t first_vertex, count = walk_chain(b, e, visited, chain_edges, &first_vertex);
             status = pair_chain(b, chain_edges, count, first_vertex, ctx);
+            if (!status)
+                status = seam_to_dart_if_slit(b, ctx);
         }
     free(visited);
     free(chain_edges);

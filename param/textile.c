@@ -45,10 +45,25 @@
  * distance of every vertex to its current position is added: it fixes the
  * null space without measurably biasing the solution.
  *
- * Stopping: after `iterations` global steps (20), or when the energy of the
- * current iterate (evaluated in the local step) changed by no more than
- * `tolerance` (1e-6) relative to the previous one. A last grain alignment
- * and the side-by-side layout (lscm.c) follow.
+ * Monotone steps (line_search): the local/global step is not a descent step
+ * for Eq. 10 (the stretch rows are linearized around the old 2D triangles:
+ * a triangle squeezed to 1/7 of its 3D length is asked to grow 7x in one
+ * step, and with its neighbours it overshoots; seams and ARAP alone would be
+ * a proper majorization). Seen on the diffavatar shirt: the energy went
+ * 640K -> 31K -> 19M at the last step, strain 174, flipped faces. So every
+ * global step is followed by a backtracking: the new iterate is aligned and
+ * evaluated; it is kept when the total energy did not increase and no panel
+ * has more collapsed or mirrored faces than the LSCM start had; otherwise the
+ * panels that got worse take half their step (all panels when none did on
+ * its own: seams couple them), at most MAX_STEP_HALVINGS times, after which
+ * the previous iterate is kept and the iteration stops. The returned energy
+ * is therefore never above the start's, and the energies reported through
+ * options->on_iteration never increase.
+ *
+ * Stopping: after `iterations` global steps (20), when the energy changed by
+ * no more than `tolerance` (1e-6) relative to the previous iterate, or when
+ * no fraction of the step lowers it. The side-by-side layout (lscm.c)
+ * follows.
  *
  * Cost per iteration: O(F) for the local step and the assembly (a scatter
  * into precomputed CSC slots, no allocation), plus a few triangular solves
@@ -81,7 +96,6 @@
 
 /* Shared with param/lscm.c (see there). */
 double pz_param_face_frame(const double *pos, const int32_t *face, double local[3], double e1[3], double e2[3]);
-void pz_param_rotate_vertices(const int32_t *vertex_ids, int32_t vertex_count, double angle, double *uv);
 pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
 void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const int32_t *order, double *uv);
 
@@ -122,11 +136,17 @@ typedef struct textile_state {
     double grain[3];
     int threads;
     int parallel;             /* 1: big enough for threads to pay (PARALLEL_MIN_FACES) */
+    int across_panels;        /* parallel and several panels: per-panel loops are split across threads */
+    int within_panel;         /* parallel and one panel: per-panel loops split their own faces or vertices */
     int32_t pose_total;       /* 1 + poses used */
     double *frames;           /* face_count x pose_total x 3: x1, x2, y2 of the 3D triangle's frame */
     double *areas;            /* face_count: rest 3D area */
     double *grain_local;      /* face_count x 2: the grain projected onto the rest face, in its frame */
     face_terms *terms;        /* face_count */
+    double *face_energy;      /* face_count: the face's terms of Eq. 10 at the last evaluated uv */
+    uint8_t *face_flipped;    /* face_count: 1 when its 2D triangle is collapsed or mirrored */
+    int32_t *vertex_panel;    /* vertex_count */
+    double *panel_pull;       /* panel_count: seam and dart energy of the panel's vertices */
     int32_t *vertex_local;    /* vertex_count: index within its panel */
     double *pull_weight;      /* vertex_count: summed seam/dart weights */
     double *pull_target;      /* vertex_count x 2: weighted sums of seam/dart targets */
@@ -170,6 +190,10 @@ static void state_free(textile_state *state)
     free(state->areas);
     free(state->grain_local);
     free(state->terms);
+    free(state->face_energy);
+    free(state->face_flipped);
+    free(state->vertex_panel);
+    free(state->panel_pull);
     free(state->vertex_local);
     free(state->pull_weight);
     free(state->pull_target);
@@ -371,11 +395,18 @@ static pz_status state_setup(textile_state *state, pz_ctx *ctx)
     state->pull_weight = malloc(nv * sizeof(double) + 1);
     state->pull_target = malloc(nv * 2 * sizeof(double) + 1);
     state->panels = calloc((size_t)pattern->panel_count + 1, sizeof(panel_system));
+    state->face_energy = malloc(nf * sizeof(double) + 1);
+    state->face_flipped = malloc(nf + 1);
+    state->vertex_panel = malloc(nv * sizeof(int32_t) + 1);
+    state->panel_pull = malloc((size_t)pattern->panel_count * sizeof(double) + 1);
     if (!state->frames || !state->areas || !state->grain_local || !state->terms || !state->vertex_local || !state->pull_weight ||
-        !state->pull_target || !state->panels)
+        !state->pull_target || !state->panels || !state->face_energy || !state->face_flipped || !state->vertex_panel ||
+        !state->panel_pull)
         return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
     for (size_t v = 0; v < nv; ++v)
         state->vertex_local[v] = -1;
+    for (size_t i = 0; i < 3 * nf; ++i) /* check_panels: every vertex is in one panel */
+        state->vertex_panel[mesh->faces[i]] = pattern->face_panel[i / 3];
     compute_frames(state);
     pz_status failed = PZ_OK;
     char message[sizeof ctx->error] = "";
@@ -482,6 +513,8 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
             double r = qe[e][k] - terms->t[e][k];
             energy += state->w_rigid * r * r;
         }
+    state->face_energy[f] = energy;
+    state->face_flipped[f] = !(twice_area > 0);
     return energy;
 }
 
@@ -492,6 +525,7 @@ static double pull(textile_state *state, int32_t v, double weight, const double 
     state->pull_target[2 * v] += weight * target[0];
     state->pull_target[2 * v + 1] += weight * target[1];
     double du = uv[2 * v] - target[0], dv = uv[2 * v + 1] - target[1];
+    state->panel_pull[state->vertex_panel[v]] += weight * (du * du + dv * dv);
     return weight * (du * du + dv * dv);
 }
 
@@ -588,6 +622,7 @@ static double local_step(textile_state *state, const double *uv)
     /* Seams and darts touch few vertices: serial. */
     memset(state->pull_weight, 0, (size_t)pattern->mesh->vertex_count * sizeof(double));
     memset(state->pull_target, 0, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+    memset(state->panel_pull, 0, (size_t)pattern->panel_count * sizeof(double));
     for (int32_t s = 0; s < pattern->seam_count; ++s)
         energy += seam_targets(state, &pattern->seams[s], uv);
     for (int32_t d = 0; d < pattern->dart_count; ++d)
@@ -604,7 +639,9 @@ static double panel_grain_angle(const textile_state *state, int32_t panel, const
 {
     const pz_mesh *mesh = state->pattern->mesh;
     double glen = sqrt(dot3(state->grain, state->grain));
-    double sum[2] = {0, 0}, area_sum = 0;
+    double sum_u = 0, sum_v = 0, area_sum = 0;
+#pragma omp parallel for schedule(static) reduction(+ : sum_u, sum_v, area_sum) num_threads(state->threads) \
+    if (state->within_panel)
     for (int32_t i = state->offsets[panel]; i < state->offsets[panel + 1]; ++i) {
         int32_t f = state->order[i];
         const int32_t *face = mesh->faces + 3 * f;
@@ -624,23 +661,47 @@ static double panel_grain_angle(const textile_state *state, int32_t panel, const
         double dlen = sqrt(dx * dx + dy * dy);
         if (!(dlen > 0))
             continue;
-        sum[0] += area * projected * dx / dlen;
-        sum[1] += area * projected * dy / dlen;
+        sum_u += area * projected * dx / dlen;
+        sum_v += area * projected * dy / dlen;
     }
-    if (!(sqrt(sum[0] * sum[0] + sum[1] * sum[1]) > 1e-3 * area_sum))
+    if (!(sqrt(sum_u * sum_u + sum_v * sum_v) > 1e-3 * area_sum))
         return 0;
-    return 1.57079632679489661923 - atan2(sum[1], sum[0]);
+    return 1.57079632679489661923 - atan2(sum_v, sum_u);
+}
+
+/* pz_param_rotate_vertices (lscm.c) for one panel, split across threads when
+ * the pattern is one big panel. */
+static void rotate_panel(const textile_state *state, int32_t panel, double angle, double *uv)
+{
+    const panel_system *system = &state->panels[panel];
+    int32_t n = system->vertex_count;
+    if (angle == 0 || n == 0)
+        return;
+    double cu = 0, cv = 0;
+#pragma omp parallel for schedule(static) reduction(+ : cu, cv) num_threads(state->threads) if (state->within_panel)
+    for (int32_t l = 0; l < n; ++l) {
+        cu += uv[2 * system->vertices[l]];
+        cv += uv[2 * system->vertices[l] + 1];
+    }
+    cu /= n;
+    cv /= n;
+    double c = cos(angle), s = sin(angle);
+#pragma omp parallel for schedule(static) num_threads(state->threads) if (state->within_panel)
+    for (int32_t l = 0; l < n; ++l) {
+        double *p = uv + 2 * system->vertices[l];
+        double x = p[0] - cu, y = p[1] - cv;
+        p[0] = cu + c * x - s * y;
+        p[1] = cv + s * x + c * y;
+    }
 }
 
 /* Step 1: rigid rotation of every panel so its warp follows the grain. */
 static void align_grain(textile_state *state, double *uv)
 {
     const pz_pattern *pattern = state->pattern;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
-    for (int32_t p = 0; p < pattern->panel_count; ++p) {
-        double angle = panel_grain_angle(state, p, uv);
-        pz_param_rotate_vertices(state->panels[p].vertices, state->panels[p].vertex_count, angle, uv);
-    }
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
+    for (int32_t p = 0; p < pattern->panel_count; ++p)
+        rotate_panel(state, p, panel_grain_angle(state, p, uv), uv);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -838,6 +899,153 @@ static pz_status global_step(textile_state *state, double *uv, pz_ctx *ctx)
 }
 
 /* ------------------------------------------------------------------------ */
+/* Monotone steps                                                            */
+/* ------------------------------------------------------------------------ */
+
+/* Halvings of a panel's step before the whole step is given up. */
+#define MAX_STEP_HALVINGS 5
+/* Relative slack on "the energy did not increase" (rounding of the sums). */
+#define ENERGY_SLACK 1e-10
+
+/* Grain alignment and local step at uv: E_textile (Eq. 10) of uv as it will
+ * be returned, and the terms of the next global step. */
+static double evaluate(textile_state *state, double *uv)
+{
+    align_grain(state, uv);
+    return local_step(state, uv);
+}
+
+/* Per panel: its energy (faces + seam and dart pulls on its vertices) and
+ * its collapsed or mirrored faces, from the last evaluation. */
+static void panel_figures(const textile_state *state, double *energy, int32_t *flipped)
+{
+    const pz_pattern *pattern = state->pattern;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
+    for (int32_t p = 0; p < pattern->panel_count; ++p) {
+        double sum = state->panel_pull[p];
+        int32_t count = 0;
+#pragma omp parallel for schedule(static) reduction(+ : sum, count) num_threads(state->threads) if (state->within_panel)
+        for (int32_t i = state->offsets[p]; i < state->offsets[p + 1]; ++i) {
+            sum += state->face_energy[state->order[i]];
+            count += state->face_flipped[state->order[i]];
+        }
+        energy[p] = sum;
+        flipped[p] = count;
+    }
+}
+
+/* Per-panel bookkeeping of the line search (panel_count each). */
+typedef struct step_control {
+    double *previous_uv, *full_uv;  /* vertex_count x 2: the accepted iterate, the global step's result */
+    double *step;                   /* per panel: fraction of the global step taken */
+    double *energy, *trial_energy;  /* per panel, accepted and trial */
+    int32_t *flipped, *trial_flipped, *allowed_flipped; /* allowed: as many as the start had */
+} step_control;
+
+static void step_control_free(step_control *control)
+{
+    free(control->previous_uv);
+    free(control->full_uv);
+    free(control->step);
+    free(control->energy);
+    free(control->trial_energy);
+    free(control->flipped);
+    free(control->trial_flipped);
+    free(control->allowed_flipped);
+}
+
+static int step_control_init(step_control *control, const pz_pattern *pattern)
+{
+    size_t nv = (size_t)pattern->mesh->vertex_count, np = (size_t)pattern->panel_count;
+    control->previous_uv = malloc(nv * 2 * sizeof(double) + 1);
+    control->full_uv = malloc(nv * 2 * sizeof(double) + 1);
+    control->step = malloc(np * sizeof(double) + 1);
+    control->energy = malloc(np * sizeof(double) + 1);
+    control->trial_energy = malloc(np * sizeof(double) + 1);
+    control->flipped = malloc(np * sizeof(int32_t) + 1);
+    control->trial_flipped = malloc(np * sizeof(int32_t) + 1);
+    control->allowed_flipped = malloc(np * sizeof(int32_t) + 1);
+    return control->previous_uv && control->full_uv && control->step && control->energy && control->trial_energy &&
+           control->flipped && control->trial_flipped && control->allowed_flipped;
+}
+
+/* uv = previous + step[p] (full - previous) on every panel p. */
+static void blend(const textile_state *state, const step_control *control, double *uv)
+{
+    const pz_pattern *pattern = state->pattern;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
+    for (int32_t p = 0; p < pattern->panel_count; ++p) {
+        const panel_system *system = &state->panels[p];
+        double t = control->step[p];
+#pragma omp parallel for schedule(static) num_threads(state->threads) if (state->within_panel)
+        for (int32_t l = 0; l < system->vertex_count; ++l)
+            for (int k = 0; k < 2; ++k) {
+                size_t i = 2 * (size_t)system->vertices[l] + k;
+                uv[i] = control->previous_uv[i] + t * (control->full_uv[i] - control->previous_uv[i]);
+            }
+    }
+}
+
+/*
+ * Backtracking after a global step (uv holds its result; control->previous_uv
+ * the accepted iterate, of energy `energy`, already evaluated into
+ * control->energy / flipped). The step is accepted when the total energy did
+ * not increase and no panel has more collapsed or mirrored faces than the
+ * start had; otherwise the panels that got worse (energy up or new flips; all
+ * panels when none did alone, since seams couple them) take half their step,
+ * and so on MAX_STEP_HALVINGS times, after which the previous iterate is
+ * restored. Returns the energy of the iterate left in uv (evaluated, so the
+ * local-step terms belong to it); *damped is set when the step was shortened,
+ * *stalled when it was given up.
+ */
+static double line_search(textile_state *state, step_control *control, double energy, double tolerance, double *uv,
+                          int *damped, int *stalled)
+{
+    const pz_pattern *pattern = state->pattern;
+    size_t bytes = (size_t)pattern->mesh->vertex_count * 2 * sizeof(double);
+    int32_t np = pattern->panel_count;
+    memcpy(control->full_uv, uv, bytes);
+    for (int32_t p = 0; p < np; ++p)
+        control->step[p] = 1;
+    *damped = *stalled = 0;
+    for (int halving = 0;; ++halving) {
+        double trial = evaluate(state, uv);
+        panel_figures(state, control->trial_energy, control->trial_flipped);
+        int new_flips = 0;
+        for (int32_t p = 0; p < np; ++p)
+            new_flips |= control->trial_flipped[p] > control->allowed_flipped[p];
+        if (isfinite(trial) && trial <= energy * (1 + ENERGY_SLACK) && !new_flips) {
+            memcpy(control->energy, control->trial_energy, (size_t)np * sizeof(double));
+            memcpy(control->flipped, control->trial_flipped, (size_t)np * sizeof(int32_t));
+            return trial;
+        }
+        /* A full step that changes the energy by no more than the stopping
+         * tolerance means the iteration has converged: halving it would only
+         * chase rounding (each halving costs a local step). */
+        int converged = halving == 0 && !new_flips && isfinite(trial) && trial - energy <= tolerance * energy;
+        *damped = !converged;
+        if (converged || halving == MAX_STEP_HALVINGS) {
+            memcpy(uv, control->previous_uv, bytes);
+            *stalled = 1;
+            return evaluate(state, uv);
+        }
+        int blamed = 0;
+        for (int32_t p = 0; p < np; ++p) {
+            int worse = control->trial_flipped[p] > control->allowed_flipped[p] ||
+                        !(control->trial_energy[p] <= control->energy[p] + ENERGY_SLACK * energy);
+            if (worse && control->step[p] > 0) {
+                control->step[p] *= 0.5;
+                blamed = 1;
+            }
+        }
+        if (!blamed)
+            for (int32_t p = 0; p < np; ++p)
+                control->step[p] *= 0.5;
+        blend(state, control, uv);
+    }
+}
+
+/* ------------------------------------------------------------------------ */
 /* Driver                                                                    */
 /* ------------------------------------------------------------------------ */
 
@@ -864,6 +1072,11 @@ static void read_options(textile_state *state, const pz_textile_options *options
     memcpy(state->grain, options->grain_given ? options->grain : up, sizeof state->grain);
     state->threads = options->threads > 0 ? options->threads : omp_get_max_threads();
     state->parallel = state->threads > 1 && state->pattern->mesh->face_count >= PARALLEL_MIN_FACES;
+    /* A parallel loop over one panel leaves every thread but one spinning at
+     * the barrier (on a busy machine, descheduled: 5x slower iterations were
+     * measured), so one-panel patterns split the work inside the panel. */
+    state->across_panels = state->parallel && state->pattern->panel_count > 1;
+    state->within_panel = state->parallel && state->pattern->panel_count == 1;
     state->pose_total = 1 + (options->use_poses ? state->pattern->mesh->pose_count : 0);
     state->regularization = 1e-8 * fmax(1.0, state->w_stretch + state->w_rigid);
 }
@@ -897,28 +1110,42 @@ pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *
         state_free(&state);
         return status;
     }
+    step_control control;
+    memset(&control, 0, sizeof control);
+    if (!step_control_init(&control, pattern)) {
+        step_control_free(&control);
+        state_free(&state);
+        return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+    }
     double solve_start = pz_seconds();
     outcome.init_ms = 1e3 * (solve_start - start);
-    double previous = 0;
-    for (int it = 0;; ++it) {
-        align_grain(&state, uv);
-        double energy = local_step(&state, uv);
-        if (it == 0)
-            outcome.initial_energy = energy;
-        outcome.final_energy = energy;
-        if (it > 0 && fabs(energy - previous) <= tolerance * previous) {
-            outcome.converged = 1;
-            break;
-        }
-        if (it == iterations)
-            break;
-        previous = energy;
+    double energy = evaluate(&state, uv);
+    panel_figures(&state, control.energy, control.flipped);
+    memcpy(control.allowed_flipped, control.flipped, (size_t)pattern->panel_count * sizeof(int32_t));
+    outcome.initial_energy = energy;
+    if (options && options->on_iteration)
+        options->on_iteration(options->user, 0, energy);
+    for (int it = 0; it < iterations; ++it) {
+        double previous = energy;
+        memcpy(control.previous_uv, uv, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
         if ((status = global_step(&state, uv, ctx))) {
+            step_control_free(&control);
             state_free(&state);
             return status;
         }
+        int damped, stalled;
+        energy = line_search(&state, &control, previous, tolerance, uv, &damped, &stalled);
+        outcome.damped_steps += damped;
         outcome.iterations_run = it + 1;
+        if (options && options->on_iteration)
+            options->on_iteration(options->user, it + 1, energy);
+        if (stalled || fabs(energy - previous) <= tolerance * previous) {
+            outcome.converged = 1;
+            break;
+        }
     }
+    outcome.final_energy = energy;
+    step_control_free(&control);
     double end = pz_seconds();
     outcome.solve_ms = 1e3 * (end - solve_start);
     outcome.iteration_ms = outcome.iterations_run ? outcome.solve_ms / outcome.iterations_run : 0;

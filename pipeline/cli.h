@@ -44,12 +44,18 @@ enum pz_cli_option {
     PZ_CLI_OPT_FABRIC = 1u << 16,     /* --fabric KSU,KSV,KR */
     PZ_CLI_OPT_SKETCH = 1u << 17,     /* --sketch FILE */
     PZ_CLI_OPT_SCALES = 1u << 18,     /* --scales K */
-    PZ_CLI_OPT_SMOOTHNESS = 1u << 19  /* --smoothness W */
+    PZ_CLI_OPT_SMOOTHNESS = 1u << 19, /* --smoothness W */
+    PZ_CLI_OPT_EDGE = 1u << 20,       /* --edge MM (prepare) */
+    PZ_CLI_OPT_WELD = 1u << 21,       /* --weld MM (prepare) */
+    PZ_CLI_OPT_KEEP = 1u << 22,       /* --keep largest|all (prepare) */
+    PZ_CLI_OPT_SCHEME = 1u << 23,     /* --scheme global|progressive (flatten, wirewarp) */
+    PZ_CLI_OPT_RELAX = 1u << 24,      /* --relax heap|full (flatten, springmass) */
+    PZ_CLI_OPT_FEATURES = 1u << 25    /* --features FILE (flatten, wirewarp) */
 };
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 11
+#define PZ_CLI_VALUE_COUNT 17
 static inline int pz_cli_value_index(unsigned flag)
 {
     int bit = 0;
@@ -105,6 +111,8 @@ pz_status pz_cli_check(const pz_cli_args *args, pz_ctx *ctx);
 pz_status pz_cli_generate(const pz_cli_args *args, pz_ctx *ctx);
 pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_flatten.c */
 pz_status pz_cli_field(const pz_cli_args *args, pz_ctx *ctx);     /* cmd_field.c */
+pz_status pz_cli_prepare(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_prepare.c */
+extern const char pz_cli_prepare_usage[];
 extern const char pz_cli_flatten_usage[];
 extern const char pz_cli_field_usage[];
 extern const char pz_cli_info_usage[];
@@ -128,6 +136,14 @@ pz_status pz_cli_expect_positionals(const pz_cli_args *args, int count, const ch
  */
 pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_mesh **out,
                                  pz_units *units_used, pz_ctx *ctx);
+
+/**
+ * pz_mesh_prepare on *mesh, but a run that fails must print its one error
+ * line only: a copy is prepared quietly first, and only on success is the
+ * preparation repeated aloud (it is deterministic) or, under --quiet, the
+ * prepared copy kept in place of *mesh. On failure *mesh is unchanged.
+ */
+pz_status pz_cli_prepare_quietly_first(pz_mesh **mesh, const char *path, unsigned repair_flags, pz_ctx *ctx);
 
 /**
  * Converts a freshly read mesh to millimetres with --units, or a guess.

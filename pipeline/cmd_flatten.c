@@ -15,13 +15,20 @@
  *     groups split into connected components; --seams/--darts files become
  *     pz_correspondences in garment vertex ids; pz_pattern_build cuts the
  *     garment (and cuts non-disk panels into disks).
- *  3. flatten: pz_param_textile (pietroni2022 Sec. 4.3) or, with
- *     --backend lscm, pz_param_lscm_pattern (Levy 2002), then a shelf layout
- *     when pieces overlap.
+ *  3. flatten with the chosen back-end: pz_param_textile (pietroni2022
+ *     Sec. 4.3, default), pz_param_lscm_pattern (Levy 2002),
+ *     pz_param_wirewarp (wang2008; --scheme, --features snapped with
+ *     pz_feature_curves_snap) or pz_param_springmass (wang2002 with the
+ *     IISERM heap relaxation; --relax; orthotropic with --fabric), then a
+ *     shelf layout when pieces overlap. The grain is --grain or, by default,
+ *     the garment's vertical axis (pz_mesh_vertical_axis: y-up tools and
+ *     z-up scanners both get their warp along the garment's height), passed
+ *     explicitly to every back-end.
  *  4. metrics: pz_metrics_compute on the rest pose and on every extra pose;
  *     strain figures in the report are the worst over the poses.
- *  5. write: DIR is created (mkdir -p); the three files are written to
- *     temporaries and renamed only when all three are complete. If anything
+ *  5. write: DIR is created (mkdir -p); the three files (four with
+ *     springmass: energy.svg) are written to temporaries and renamed only
+ *     when all are complete. If anything
  *     fails, the files renamed so far and the directories created are removed
  *     again, so a failed run leaves nothing (all or nothing).
  *
@@ -43,7 +50,8 @@
 const char pz_cli_flatten_usage[] =
     "usage: panelize flatten MESH... -o DIR [--panels FILE|uv] [--seams FILE]...\n"
     "           [--darts [K:]FILE]... [--grain X,Y,Z] [--pose FILE]...\n"
-    "           [--backend textile|lscm] [--iterations N] [--weights S,R,D,M]\n"
+    "           [--backend textile|lscm|wirewarp|springmass] [--scheme global|progressive]\n"
+    "           [--relax heap|full] [--features FILE] [--iterations N] [--weights S,R,D,M]\n"
     "           [--fabric KSU,KSV,KR] [--units U] [--repair] [--json] [--quiet]\n"
     "\n"
     "Flattens every panel of a garment into a sewing pattern and writes, into DIR\n"
@@ -52,6 +60,8 @@ const char pz_cli_flatten_usage[] =
     "                one group panel_K per panel\n"
     "  pattern.svg   the pieces at 1:1 in millimetres with outlines and grainlines\n"
     "  report.json   strain, shear, energies, seam and dart figures per panel\n"
+    "  energy.svg    (springmass only) the pieces coloured by strain energy, with\n"
+    "                the suggested cutting lines\n"
     "\n"
     "Panels: a disk mesh is one panel; OBJ groups and connected components are\n"
     "panels; several MESH files are concatenated, panel K = file K. A panel that\n"
@@ -66,15 +76,22 @@ const char pz_cli_flatten_usage[] =
     "  --darts [K:]FILE     a dart of panel K: tip vertex, then `p q` pairs; K\n"
     "                       defaults to the K of a file named patch_K_dart_J\n"
     "                       (repeatable)\n"
-    "  --grain X,Y,Z        the 3D direction of the warp (default 0,0,1)\n"
+    "  --grain X,Y,Z        the 3D direction of the warp (default: the garment's\n"
+    "                       vertical, +y or +z, whichever it is taller along)\n"
     "  --pose FILE          an extra pose (repeatable; one MESH only)\n"
-    "  --backend B          textile (default) or lscm\n"
+    "  --backend B          textile (default), lscm, wirewarp (length-exact\n"
+    "                       boundaries) or springmass (with an energy map)\n"
+    "  --scheme S           wirewarp: global (default) or progressive\n"
+    "  --relax R            springmass: heap (default) or full\n"
+    "  --features FILE      wirewarp: feature curves, JSON {\"curves\":[{\"kind\":\n"
+    "                       \"key\"|\"accessory\",\"points\":[[x,y,z],...]}]}\n"
     "  --iterations N       textile iterations, 1..10000 (default 20)\n"
     "  --weights S,R,D,M    stretch, rigidity, dart and seam weights\n"
     "                       (default 5,1,5,5)\n"
     "  --fabric KSU,KSV,KR  weft (u) and warp (v) tensile stiffness (N/mm) and shear\n"
     "                       stiffness (N/mm/rad) for the orthotropic energy\n"
-    "                       (default 0.946,0.548,0.159)\n"
+    "                       (default 0.946,0.548,0.159); with springmass, given\n"
+    "                       = use the orthotropic energy instead of springs\n"
     "  --units U            the input's units: mm, cm, m or auto (default)\n"
     "  --repair             repair the mesh before validating (see panelize check)\n"
     "  --json               print report.json on stdout\n"
@@ -91,8 +108,15 @@ enum timing { TIME_READ, TIME_PATTERN, TIME_FLATTEN, TIME_METRICS, TIME_WRITE, T
 
 /* ---------------------------------------------------------------- options */
 
+enum backend { BACKEND_TEXTILE, BACKEND_LSCM, BACKEND_WIREWARP, BACKEND_SPRINGMASS, BACKEND_COUNT };
+static const char *const backend_names[BACKEND_COUNT] = {"textile", "lscm", "wirewarp", "springmass"};
+
 typedef struct flatten_settings {
-    int lscm;                 /* --backend lscm */
+    int backend;              /* enum backend */
+    int progressive;          /* --scheme progressive (wirewarp) */
+    int relax_full;           /* --relax full (springmass) */
+    const char *features_path; /* --features (wirewarp), or NULL */
+    int fabric_given;         /* --fabric: springmass turns orthotropic */
     int iterations;
     int weights_given;
     double weights[4];        /* stretch, rigid, dart, seam */
@@ -118,19 +142,55 @@ static pz_status parse_numbers(const char *option, const char *text, double *val
     return PZ_OK;
 }
 
+/* --scheme, --relax and --features belong to one back-end each; elsewhere they are a mistake. */
+static pz_status parse_backend_options(const pz_cli_args *args, flatten_settings *settings, pz_ctx *ctx)
+{
+    const char *backend = backend_names[settings->backend];
+    const char *text;
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_SCHEME))) {
+        if (settings->backend != BACKEND_WIREWARP)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --scheme works with --backend wirewarp, not %s", backend);
+        if (strcmp(text, "global") != 0 && strcmp(text, "progressive") != 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --scheme: '%s' is not global or progressive", text);
+        settings->progressive = strcmp(text, "progressive") == 0;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_RELAX))) {
+        if (settings->backend != BACKEND_SPRINGMASS)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --relax works with --backend springmass, not %s", backend);
+        if (strcmp(text, "heap") != 0 && strcmp(text, "full") != 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --relax: '%s' is not heap or full", text);
+        settings->relax_full = strcmp(text, "full") == 0;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_FEATURES))) {
+        if (settings->backend != BACKEND_WIREWARP)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --features works with --backend wirewarp, not %s", backend);
+        if (!*text)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --features: empty file name");
+        settings->features_path = text;
+    }
+    return PZ_OK;
+}
+
 static pz_status parse_settings(const pz_cli_args *args, flatten_settings *settings, pz_ctx *ctx)
 {
     memset(settings, 0, sizeof *settings);
     settings->iterations = DEFAULT_ITERATIONS;
     settings->weights[0] = 5, settings->weights[1] = 1, settings->weights[2] = 5, settings->weights[3] = 5;
     settings->fabric = (pz_fabric){0.946, 0.548, 0.159};
-    settings->grain[2] = 1;
+    /* No --grain: the garment's vertical axis, known once the mesh is read (pz_cli_flatten). */
     const char *text;
     if ((text = pz_cli_value(args, PZ_CLI_OPT_BACKEND))) {
-        if (strcmp(text, "lscm") != 0 && strcmp(text, "textile") != 0)
-            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --backend: '%s' is not textile or lscm", text);
-        settings->lscm = strcmp(text, "lscm") == 0;
+        settings->backend = BACKEND_COUNT;
+        for (int b = 0; b < BACKEND_COUNT; ++b)
+            if (strcmp(text, backend_names[b]) == 0)
+                settings->backend = b;
+        if (settings->backend == BACKEND_COUNT)
+            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --backend: '%s' is not textile, lscm, wirewarp or springmass",
+                            text);
     }
+    pz_status status = parse_backend_options(args, settings, ctx);
+    if (status != PZ_OK)
+        return status;
     if ((text = pz_cli_value(args, PZ_CLI_OPT_ITERATIONS))) {
         char *end = NULL;
         errno = 0;
@@ -140,7 +200,6 @@ static pz_status parse_settings(const pz_cli_args *args, flatten_settings *setti
                             MAX_ITERATIONS);
         settings->iterations = (int)iterations;
     }
-    pz_status status;
     if ((text = pz_cli_value(args, PZ_CLI_OPT_WEIGHTS))) {
         if ((status = parse_numbers("--weights", text, settings->weights, 4, ctx)))
             return status;
@@ -157,6 +216,7 @@ static pz_status parse_settings(const pz_cli_args *args, flatten_settings *setti
             if (fabric[i] <= 0)
                 return pz_error(ctx, PZ_ERR_USAGE, "flatten: --fabric: '%s': stiffnesses must be positive", text);
         settings->fabric = (pz_fabric){fabric[0], fabric[1], fabric[2]};
+        settings->fabric_given = 1;
     }
     if ((text = pz_cli_value(args, PZ_CLI_OPT_GRAIN))) {
         if ((status = parse_numbers("--grain", text, settings->grain, 3, ctx)))
@@ -325,32 +385,6 @@ static pz_status map_raw_ids(garment_input *input, int32_t *kept, pz_ctx *ctx)
     return PZ_OK;
 }
 
-/*
- * pz_mesh_prepare notes each repair as it makes it, but a failed run prints
- * one line only: prepare a copy quietly first, and repeat aloud on success
- * (as pz_cli_load_valid_mesh does).
- */
-static pz_status prepare_quietly_first(pz_mesh **mesh, const char *path, unsigned repair_flags, pz_ctx *ctx)
-{
-    pz_mesh *trial = NULL;
-    pz_status status = pz_mesh_copy(*mesh, &trial, ctx);
-    if (status != PZ_OK)
-        return status;
-    int quiet = ctx->quiet;
-    ctx->quiet = 1;
-    status = pz_mesh_prepare(trial, path, repair_flags, ctx);
-    ctx->quiet = quiet;
-    if (status == PZ_OK && quiet) {
-        pz_mesh_free(mesh);
-        *mesh = trial;
-        return PZ_OK;
-    }
-    pz_mesh_free(&trial);
-    if (status != PZ_OK)
-        return status;
-    return pz_mesh_prepare(*mesh, path, repair_flags, ctx);
-}
-
 static pz_status load_garment(const pz_cli_args *args, garment_input *input, pz_ctx *ctx)
 {
     pz_status status = read_raw(args, input, ctx);
@@ -360,7 +394,7 @@ static pz_status load_garment(const pz_cli_args *args, garment_input *input, pz_
     if (status != PZ_OK)
         return status;
     pz_cli_mesh_to_mm(args, input->mesh, &input->units, NULL);
-    status = prepare_quietly_first(&input->mesh, args->positionals[0], args->repair_flags, ctx);
+    status = pz_cli_prepare_quietly_first(&input->mesh, args->positionals[0], args->repair_flags, ctx);
     if (status != PZ_OK)
         return status;
     pz_mesh *mesh = input->mesh;
@@ -563,11 +597,75 @@ static pz_status read_correspondences(const pz_cli_args *args, const garment_inp
 
 /* ---------------------------------------------------------------- flatten and measure */
 
-static pz_status flatten(const flatten_settings *settings, const pz_pattern *pattern, double *uv,
-                         pz_textile_result *result, pz_ctx *ctx)
+/* What the back-end reports about its own run (backend_result in report.json). */
+typedef struct backend_outcome {
+    pz_textile_result textile;
+    pz_wirewarp_result wirewarp;
+    pz_springmass_result springmass;   /* cleared with pz_springmass_result_clear */
+    int32_t feature_count;
+    double ms;
+} backend_outcome;
+
+/* --features: read in the input's units, converted like the mesh, snapped to the cut mesh's edges. */
+static pz_status read_feature_curves(const flatten_settings *settings, const pz_pattern *pattern, double mm_per_unit,
+                                     pz_feature_curves **out, pz_ctx *ctx)
 {
-    if (settings->lscm)
-        return pz_param_lscm_pattern(pattern, settings->grain, uv, ctx);
+    *out = NULL;
+    if (!settings->features_path)
+        return PZ_OK;
+    pz_feature_file file;
+    pz_status status = pz_flatten_read_features(settings->features_path, mm_per_unit, &file, ctx);
+    if (status != PZ_OK)
+        return status;
+    status = pz_feature_curves_snap(pattern, file.polylines, file.curve_count, 0, out, ctx);
+    pz_feature_file_clear(&file);
+    if (status != PZ_OK) {
+        /* The library names the curve and point; add the file. */
+        char message[sizeof ctx->error];
+        const char *text = ctx->error;
+        if (strncmp(text, "features: ", 10) == 0)
+            text += 10;
+        snprintf(message, sizeof message, "%s", text);
+        return pz_error(ctx, status, "%s: %s", settings->features_path, message);
+    }
+    return PZ_OK;
+}
+
+static pz_status flatten_wirewarp(const flatten_settings *settings, const pz_pattern *pattern, double mm_per_unit,
+                                  double *uv, backend_outcome *outcome, pz_ctx *ctx)
+{
+    pz_feature_curves *features = NULL;
+    pz_status status = read_feature_curves(settings, pattern, mm_per_unit, &features, ctx);
+    if (status != PZ_OK)
+        return status;
+    outcome->feature_count = features ? features->curve_count : 0;
+    pz_wirewarp_options options = {0};
+    options.scheme = settings->progressive;
+    options.grain_given = 1;
+    memcpy(options.grain, settings->grain, sizeof options.grain);
+    status = pz_param_wirewarp(pattern, &options, features, uv, &outcome->wirewarp, ctx);
+    pz_feature_curves_free(&features);
+    return status;
+}
+
+static pz_status flatten_springmass(const flatten_settings *settings, const pz_pattern *pattern, double *uv,
+                                    backend_outcome *outcome, pz_ctx *ctx)
+{
+    pz_springmass_options options = {0};
+    options.relax = settings->relax_full;
+    /* --fabric asks for McCartney's warp/weft/shear energy; without it, isotropic springs (wang2002). */
+    options.orthotropic = settings->fabric_given;
+    options.fabric = settings->fabric;
+    options.grain_given = 1;
+    memcpy(options.grain, settings->grain, sizeof options.grain);
+    /* The trial cut classifies each suggested cutting line as dart or gusset (mccartney2005). */
+    options.trial_cut = 1;
+    return pz_param_springmass(pattern, &options, uv, &outcome->springmass, ctx);
+}
+
+static pz_status flatten_textile(const flatten_settings *settings, const pz_pattern *pattern, double *uv,
+                                 pz_textile_result *result, pz_ctx *ctx)
+{
     pz_textile_options options = {0};
     options.iterations = settings->iterations;
     options.weights_given = 1;
@@ -579,6 +677,21 @@ static pz_status flatten(const flatten_settings *settings, const pz_pattern *pat
     memcpy(options.grain, settings->grain, sizeof options.grain);
     options.use_poses = pattern->mesh->pose_count > 0;
     return pz_param_textile(pattern, &options, uv, result, ctx);
+}
+
+static pz_status flatten(const flatten_settings *settings, const pz_pattern *pattern, double mm_per_unit,
+                         double *uv, backend_outcome *outcome, pz_ctx *ctx)
+{
+    double start = pz_seconds();
+    pz_status status;
+    switch (settings->backend) {
+    case BACKEND_LSCM: status = pz_param_lscm_pattern(pattern, settings->grain, uv, ctx); break;
+    case BACKEND_WIREWARP: status = flatten_wirewarp(settings, pattern, mm_per_unit, uv, outcome, ctx); break;
+    case BACKEND_SPRINGMASS: status = flatten_springmass(settings, pattern, uv, outcome, ctx); break;
+    default: status = flatten_textile(settings, pattern, uv, &outcome->textile, ctx); break;
+    }
+    outcome->ms = pz_cli_elapsed_ms(start, pz_seconds());
+    return status;
 }
 
 /* metrics[0] on the rest pose, metrics[p] on extra pose p. */
@@ -667,6 +780,7 @@ typedef struct flatten_run {
     const panel_choice *panels;
     const pz_pattern *pattern;
     double *uv;
+    const pz_springmass_result *springmass;  /* energy.svg is written when set */
     pz_flatten_report report;
     double start, write_start;
     char *report_text;        /* report.json, for --json too */
@@ -696,12 +810,18 @@ static pz_status write_file(flatten_run *run, enum output_file which, FILE *file
     }
 }
 
-/* Writes the three files all or nothing. */
+/*
+ * Writes the three files (four with energy.svg) all or nothing. energy.svg is
+ * written by the library's own atomic writer once the other three are complete
+ * in their temporaries, and removed again should a rename fail afterwards.
+ */
 static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
 {
     const char *dir = run->args->output_path;
     created_dirs dirs = {{0}, 0};
     char *paths[OUT_COUNT] = {0};
+    char *energy_path = NULL;
+    int energy_written = 0;
     pz_output outputs[OUT_COUNT];
     memset(outputs, 0, sizeof outputs);
     int committed = 0;
@@ -712,6 +832,13 @@ static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
     for (int i = 0; i < OUT_COUNT && status == PZ_OK; ++i)
         if ((status = pz_output_open(&outputs[i], paths[i], "wb", ctx)) == PZ_OK)
             status = write_file(run, (enum output_file)i, outputs[i].file, ctx);
+    if (status == PZ_OK && run->springmass) {
+        if (!(energy_path = join_path(dir, "energy.svg")))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);
+        else if ((status = pz_springmass_write_energy_svg(run->pattern, run->uv, run->springmass, energy_path, ctx)) ==
+                 PZ_OK)
+            energy_written = 1;
+    }
     for (; committed < OUT_COUNT && status == PZ_OK; ++committed)
         if ((status = pz_output_commit(&outputs[committed], ctx)) != PZ_OK)
             break;
@@ -721,8 +848,11 @@ static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
             pz_output_abort(&outputs[i]);
         for (int i = 0; i < committed; ++i)
             remove(paths[i]);
+        if (energy_written)
+            remove(energy_path);
         remove_created_dirs(&dirs);
     }
+    free(energy_path);
     forget_created_dirs(&dirs);
     for (int i = 0; i < OUT_COUNT; ++i)
         free(paths[i]);
@@ -744,12 +874,17 @@ static pz_status print_result(const flatten_run *run, const pz_metrics *const *m
         max_abs_strain = fmax(max_abs_strain, metrics[i]->max_abs_strain);
         injective &= metrics[i]->injective != 0;
     }
+    const pz_flatten_report *report = &run->report;
+    printf("backend:            %s%s\n", report->backend,
+           report->wirewarp ? (report->progressive ? " (progressive)" : " (global)")
+           : report->springmass ? (report->relax_full ? " (full relaxation)" : " (heap relaxation)") : "");
     printf("panels:             %d (from %s)\n", (int)rest->panel_count, run->panels->source);
     printf("seams, darts:       %d, %d\n", (int)rest->seam_count, (int)rest->dart_count);
     printf("max |strain|:       %.6f%s\n", max_abs_strain, metrics_count > 1 ? " (worst pose)" : "");
     printf("injective:          %s\n", injective ? "yes" : "no");
     printf("max seam mismatch:  %.6f\n", rest->max_seam_mismatch_rel);
-    printf("wrote:              %s/{garment.obj,pattern.svg,report.json}\n", run->args->output_path);
+    printf("wrote:              %s/{garment.obj,pattern.svg,report.json%s}\n", run->args->output_path,
+           run->springmass ? ",energy.svg" : "");
     (void)ctx;
     return PZ_OK;
 }
@@ -771,13 +906,20 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
     pz_correspondences correspondences = {0};
     pz_pattern *pattern = NULL;
     double *uv = NULL;
-    pz_textile_result textile = {0};
+    backend_outcome outcome;
+    memset(&outcome, 0, sizeof outcome);
+    const char *grain_source = "given";
     int metrics_count = 0, layout_moved = 0;
     pz_metrics **metrics = NULL;
     double *timings = run.report.timings_ms, mark = run.start, now;
 
     status = load_garment(args, &input, ctx);
     timings[TIME_READ] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
+    if (status == PZ_OK && !settings.grain_given) {
+        /* y-up (glTF, CLO3D, Blender) and z-up (scanners, CAD) garments both get the warp along their height. */
+        pz_mesh_vertical_axis(input.mesh, settings.grain);
+        grain_source = settings.grain[1] > 0.5 ? "vertical axis (y)" : "vertical axis (z)";
+    }
     if (status == PZ_OK)
         status = choose_panels(args, &input, &panels, ctx);
     if (status == PZ_OK)
@@ -789,7 +931,7 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
     if (status == PZ_OK && !(uv = calloc(2 * (size_t)pattern->mesh->vertex_count + 2, sizeof(double))))
         status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
     if (status == PZ_OK)
-        status = flatten(&settings, pattern, uv, &textile, ctx);
+        status = flatten(&settings, pattern, input.mesh->unit_scale, uv, &outcome, ctx);
     if (status == PZ_OK)
         status = pz_pattern_layout(pattern, uv, LAYOUT_GAP_MM, &layout_moved, ctx);
     timings[TIME_FLATTEN] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
@@ -806,6 +948,7 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
         run.panels = &panels;
         run.pattern = pattern;
         run.uv = uv;
+        run.springmass = settings.backend == BACKEND_SPRINGMASS ? &outcome.springmass : NULL;
         run.write_start = pz_seconds();
         pz_flatten_report *report = &run.report;
         report->input_paths = args->positionals;
@@ -816,12 +959,21 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
         report->units = pz_units_str(input.units);
         report->units_guessed = args->units == PZ_UNITS_AUTO;
         report->panels_source = panels.source;
-        report->backend = settings.lscm ? "lscm" : "textile";
+        report->backend = backend_names[settings.backend];
         report->iterations = settings.iterations;
         memcpy(report->weights, settings.weights, sizeof report->weights);
         report->fabric = settings.fabric;
         memcpy(report->grain, settings.grain, sizeof report->grain);
-        report->textile = settings.lscm ? NULL : &textile;
+        report->grain_source = grain_source;
+        report->textile = settings.backend == BACKEND_TEXTILE ? &outcome.textile : NULL;
+        report->wirewarp = settings.backend == BACKEND_WIREWARP ? &outcome.wirewarp : NULL;
+        report->progressive = settings.progressive;
+        report->feature_count = outcome.feature_count;
+        report->springmass = run.springmass;
+        report->relax_full = settings.relax_full;
+        report->orthotropic = settings.fabric_given;
+        report->backend_ms = outcome.ms;
+        report->uv = uv;
         report->layout_moved = layout_moved;
         report->pattern = pattern;
         report->metrics = (const pz_metrics *const *)metrics;
@@ -844,6 +996,7 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
     for (int i = 0; metrics && i < metrics_count; ++i)
         pz_metrics_free(&metrics[i]);
     free(metrics);
+    pz_springmass_result_clear(&outcome.springmass);
     free(uv);
     pz_pattern_free(&pattern);
     pz_correspondences_clear(&correspondences);

@@ -41,13 +41,19 @@ static const pz_cli_command command_table[] = {
      pz_cli_flatten_usage,
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
          PZ_CLI_OPT_PANELS | PZ_CLI_OPT_SEAMS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND |
-         PZ_CLI_OPT_ITERATIONS | PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC,
+         PZ_CLI_OPT_ITERATIONS | PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME |
+         PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES,
      pz_cli_flatten},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
          PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_SCALES | PZ_CLI_OPT_SMOOTHNESS,
      pz_cli_field},
+    {"prepare", "repair, weld, decimate and remesh a scan or an export into a clean garment mesh",
+     pz_cli_prepare_usage,
+     PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
+         PZ_CLI_OPT_FACES | PZ_CLI_OPT_EDGE | PZ_CLI_OPT_WELD | PZ_CLI_OPT_KEEP,
+     pz_cli_prepare},
 };
 static const size_t command_table_count = sizeof command_table / sizeof command_table[0];
 
@@ -79,6 +85,12 @@ static const option_spec option_table[] = {
     {"sketch", 0, PZ_CLI_OPT_SKETCH, 1},
     {"scales", 0, PZ_CLI_OPT_SCALES, 1},
     {"smoothness", 0, PZ_CLI_OPT_SMOOTHNESS, 1},
+    {"edge", 0, PZ_CLI_OPT_EDGE, 1},
+    {"weld", 0, PZ_CLI_OPT_WELD, 1},
+    {"keep", 0, PZ_CLI_OPT_KEEP, 1},
+    {"scheme", 0, PZ_CLI_OPT_SCHEME, 1},
+    {"relax", 0, PZ_CLI_OPT_RELAX, 1},
+    {"features", 0, PZ_CLI_OPT_FEATURES, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 
@@ -297,7 +309,7 @@ pz_status pz_cli_expect_positionals(const pz_cli_args *args, int count, const ch
  * first; only when that succeeds is the preparation repeated aloud (it is
  * deterministic), or, under --quiet, the prepared copy simply kept.
  */
-static pz_status prepare_quietly_first(pz_mesh **mesh, const char *path, unsigned repair_flags, pz_ctx *ctx)
+pz_status pz_cli_prepare_quietly_first(pz_mesh **mesh, const char *path, unsigned repair_flags, pz_ctx *ctx)
 {
     pz_mesh *trial = NULL;
     pz_status status = pz_mesh_copy(*mesh, &trial, ctx);
@@ -347,7 +359,7 @@ pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_m
         return status;
     pz_units used = PZ_UNITS_AUTO;
     pz_cli_mesh_to_mm(args, mesh, &used, NULL);
-    status = prepare_quietly_first(&mesh, path, args->repair_flags, ctx);
+    status = pz_cli_prepare_quietly_first(&mesh, path, args->repair_flags, ctx);
     if (status != PZ_OK) {
         pz_mesh_free(&mesh);
         return status;

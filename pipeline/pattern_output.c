@@ -379,6 +379,134 @@ pz_status pz_flatten_read_dart(const char *spec, const pz_vertex_space *space, p
     return PZ_OK;
 }
 
+/* ---------------------------------------------------------------- features file */
+
+/* The whole file as one string; PZ_ERR_OPEN when it cannot be read. */
+static pz_status read_text_file(const char *path, char **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    FILE *file = fopen(path, "rb");
+    if (!file)
+        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    size_t size = 0, capacity = 4096;
+    char *text = malloc(capacity);
+    while (text) {
+        size += fread(text + size, 1, capacity - size - 1, file);
+        if (size < capacity - 1)
+            break;
+        char *grown = capacity < ((size_t)1 << 30) ? realloc(text, capacity *= 2) : NULL;
+        if (!grown)
+            free(text);
+        text = grown;
+    }
+    int failed = ferror(file);
+    fclose(file);
+    if (!text)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory reading the file", path);
+    if (failed) {
+        free(text);
+        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot read", path);
+    }
+    text[size] = '\0';
+    *out = text;
+    return PZ_OK;
+}
+
+/* The curves array, checked for shape; counts its points. */
+static pz_status check_features(const char *path, const cJSON *root, int64_t *point_total, pz_ctx *ctx)
+{
+    const cJSON *curves = cJSON_IsObject(root) ? cJSON_GetObjectItemCaseSensitive(root, "curves") : NULL;
+    if (!cJSON_IsArray(curves) || cJSON_GetArraySize(curves) < 1)
+        return pz_error(ctx, PZ_ERR_DATA, "%s: expected an object with a non-empty \"curves\" array", path);
+    *point_total = 0;
+    int c = 0;
+    for (const cJSON *curve = curves->child; curve; curve = curve->next, ++c) {
+        const cJSON *kind = cJSON_GetObjectItemCaseSensitive(curve, "kind");
+        const cJSON *points = cJSON_GetObjectItemCaseSensitive(curve, "points");
+        if (!cJSON_IsString(kind) || (strcmp(kind->valuestring, "key") != 0 && strcmp(kind->valuestring, "accessory") != 0))
+            return pz_error(ctx, PZ_ERR_DATA, "%s: curve %d: \"kind\" must be \"key\" or \"accessory\"", path, c);
+        if (!cJSON_IsArray(points) || cJSON_GetArraySize(points) < 2)
+            return pz_error(ctx, PZ_ERR_DATA, "%s: curve %d: \"points\" must be an array of at least 2 points", path, c);
+        int i = 0;
+        for (const cJSON *point = points->child; point; point = point->next, ++i) {
+            int ok = cJSON_IsArray(point) && cJSON_GetArraySize(point) == 3;
+            for (const cJSON *x = ok ? point->child : NULL; x; x = x->next)
+                ok &= cJSON_IsNumber(x) && isfinite(x->valuedouble);
+            if (!ok)
+                return pz_error(ctx, PZ_ERR_DATA, "%s: curve %d point %d: expected [x, y, z] (3 finite numbers)", path,
+                                c, i);
+        }
+        *point_total += i;
+    }
+    if (c > INT32_MAX / 2 || *point_total > INT32_MAX / 3)
+        return pz_error(ctx, PZ_ERR_DATA, "%s: too many curves or points", path);
+    return PZ_OK;
+}
+
+/* Copies the checked curves out, converted to millimetres. */
+static pz_status copy_features(const char *path, const cJSON *root, int64_t point_total, double mm_per_unit,
+                               pz_feature_file *out, pz_ctx *ctx)
+{
+    const cJSON *curves = cJSON_GetObjectItemCaseSensitive(root, "curves");
+    out->curve_count = (int32_t)cJSON_GetArraySize(curves);
+    out->polylines = calloc((size_t)out->curve_count, sizeof *out->polylines);
+    out->points = malloc(3 * (size_t)point_total * sizeof(double));
+    if (!out->polylines || !out->points)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", path);
+    size_t at = 0;
+    int32_t c = 0;
+    for (const cJSON *curve = curves->child; curve; curve = curve->next, ++c) {
+        const cJSON *kind = cJSON_GetObjectItemCaseSensitive(curve, "kind");
+        const cJSON *points = cJSON_GetObjectItemCaseSensitive(curve, "points");
+        pz_feature_polyline *polyline = &out->polylines[c];
+        polyline->kind = strcmp(kind->valuestring, "key") == 0 ? PZ_FEATURE_KEY : PZ_FEATURE_ACCESSORY;
+        polyline->point_count = (int32_t)cJSON_GetArraySize(points);
+        polyline->points = out->points + 3 * at;
+        for (const cJSON *point = points->child; point; point = point->next, ++at) {
+            int k = 0;
+            for (const cJSON *x = point->child; x; x = x->next, ++k)
+                out->points[3 * at + (size_t)k] = x->valuedouble * mm_per_unit;
+        }
+    }
+    return PZ_OK;
+}
+
+pz_status pz_flatten_read_features(const char *path, double mm_per_unit, pz_feature_file *out, pz_ctx *ctx)
+{
+    memset(out, 0, sizeof *out);
+    char *text = NULL;
+    pz_status read_status = read_text_file(path, &text, ctx);
+    if (read_status != PZ_OK)
+        return read_status;
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithOpts(text, &end, 1);
+    pz_status status = PZ_OK;
+    if (!root) {
+        /* cJSON stops where the text stops being JSON: name that line. */
+        int line = 1;
+        for (const char *c = text; end && c < end && *c; ++c)
+            line += *c == '\n';
+        status = pz_error(ctx, PZ_ERR_DATA, "%s: line %d: not valid JSON", path, line);
+    }
+    int64_t point_total = 0;
+    if (status == PZ_OK)
+        status = check_features(path, root, &point_total, ctx);
+    if (status == PZ_OK)
+        status = copy_features(path, root, point_total, mm_per_unit, out, ctx);
+    cJSON_Delete(root);
+    free(text);
+    if (status != PZ_OK)
+        pz_feature_file_clear(out);
+    return status;
+}
+
+void pz_feature_file_clear(pz_feature_file *features)
+{
+    free(features->polylines);
+    free(features->points);
+    memset(features, 0, sizeof *features);
+}
+
 /* ---------------------------------------------------------------- per-panel boxes */
 
 typedef struct panel_box {
@@ -835,6 +963,15 @@ static void add_parameters(json_builder *builder, cJSON *root, const pz_flatten_
         add_number(builder, fabric, "k_r_N_per_mm_rad", report->fabric.k_r, 6);
     }
     add_doubles(builder, parameters, "grain", report->grain, 3, 6);
+    if (report->grain_source && !cJSON_AddStringToObject(parameters, "grain_source", report->grain_source))
+        builder->failed = 1;
+    if (report->wirewarp && !cJSON_AddStringToObject(parameters, "scheme", report->progressive ? "progressive" : "global"))
+        builder->failed = 1;
+    if (report->springmass) {
+        if (!cJSON_AddStringToObject(parameters, "relax", report->relax_full ? "full" : "heap") ||
+            !cJSON_AddBoolToObject(parameters, "orthotropic", report->orthotropic))
+            builder->failed = 1;
+    }
     if (report->textile) {
         cJSON *textile = add_object(builder, parameters, "textile_result");
         if (textile) {
@@ -876,13 +1013,166 @@ static void add_panels(json_builder *builder, cJSON *root, const pz_flatten_repo
         add_stat(builder, panel, "shear_deg", report, p, offsetof(pz_panel_metrics, shear_deg), 6);
         add_number(builder, panel, "orthotropic_energy", m->orthotropic_energy, 6);
         add_number(builder, panel, "arap_energy", m->arap_energy, 6);
-        add_number(builder, panel, "E_len", m->e_len, 8);
-        add_number(builder, panel, "E_ang", m->e_ang, 8);
-        add_number(builder, panel, "E_area", m->e_area, 8);
-        add_number(builder, panel, "E_shape", m->e_shape, 8);
+        add_number(builder, panel, "E_len", m->e_len, 12);
+        add_number(builder, panel, "E_ang", m->e_ang, 12);
+        add_number(builder, panel, "E_area", m->e_area, 12);
+        add_number(builder, panel, "E_shape", m->e_shape, 12);
         add_number(builder, panel, "flipped_triangles", m->flipped_triangles, 0);
         add_number(builder, panel, "boundary_self_intersections", m->boundary_self_intersections, 0);
     }
+}
+
+static void add_bool(json_builder *builder, cJSON *object, const char *key, int value)
+{
+    if (!cJSON_AddBoolToObject(object, key, value))
+        builder->failed = 1;
+}
+
+static void add_string(json_builder *builder, cJSON *object, const char *key, const char *value)
+{
+    if (!cJSON_AddStringToObject(object, key, value))
+        builder->failed = 1;
+}
+
+static void add_wirewarp_result(json_builder *builder, cJSON *object, const pz_flatten_report *report)
+{
+    const pz_wirewarp_result *r = report->wirewarp;
+    add_string(builder, object, "scheme", report->progressive ? "progressive" : "global");
+    add_number(builder, object, "feature_curves", report->feature_count, 0);
+    add_number(builder, object, "wire_patches", r->wire_patch_count, 0);
+    add_number(builder, object, "wire_nodes", r->wire_node_count, 0);
+    add_number(builder, object, "wire_edges", r->wire_edge_count, 0);
+    add_number(builder, object, "locked_angles", r->locked_count, 0);
+    add_number(builder, object, "constraints", r->constraint_count, 0);
+    add_number(builder, object, "newton_iterations", r->iterations, 0);
+    add_number(builder, object, "e_len_wires", r->e_len_wires, 15);
+    add_number(builder, object, "max_wire_error", r->max_wire_error, 15);
+    add_number(builder, object, "constraint_residual", r->constraint_residual, 15);
+    add_bool(builder, object, "best_effort", r->best_effort);
+    add_bool(builder, object, "interior_fallback", r->interior_fallback);
+    add_bool(builder, object, "interior_inverse_length", r->interior_inverse_length);
+    add_bool(builder, object, "injective", r->injective);
+    add_number(builder, object, "flipped_triangles", r->flipped_triangles, 0);
+    add_number(builder, object, "angle_ms", r->angle_ms, 3);
+    add_number(builder, object, "layout_ms", r->layout_ms, 3);
+    add_number(builder, object, "interior_ms", r->interior_ms, 3);
+}
+
+static const char *stop_name(int stop)
+{
+    switch (stop) {
+    case PZ_SPRINGMASS_STOP_ACCURACY: return "accuracy";
+    case PZ_SPRINGMASS_STOP_VARIATION: return "energy variation";
+    case PZ_SPRINGMASS_STOP_ITERATIONS: return "iteration cap";
+    default: return "none";
+    }
+}
+
+static const char *seam_kind_name(pz_seam_kind kind)
+{
+    return kind == PZ_SEAM_KIND_DART ? "dart" : kind == PZ_SEAM_KIND_GUSSET ? "gusset" : "none";
+}
+
+/* The crest line of one panel: cut-mesh vertices, their 3D points (mm) and pattern points (mm). */
+static void add_cutting_line(json_builder *builder, cJSON *object, const pz_flatten_report *report,
+                             const pz_springmass_panel *panel)
+{
+    cJSON *line = add_object(builder, object, "cutting_line");
+    cJSON *vertices = line ? cJSON_CreateIntArray(panel->cut_vertices, panel->cut_vertex_count) : NULL;
+    if (!vertices || !cJSON_AddItemToObject(line, "vertices", vertices)) {
+        cJSON_Delete(vertices);
+        builder->failed = 1;
+        return;
+    }
+    cJSON *points = add_array(builder, line, "points_3d_mm");
+    cJSON *points_2d = add_array(builder, line, "points_2d_mm");
+    const pz_mesh *mesh = report->pattern->mesh;
+    for (int32_t i = 0; points && points_2d && i < panel->cut_vertex_count; ++i) {
+        int32_t v = panel->cut_vertices[i];
+        const double *x = mesh->positions + 3 * (size_t)v;
+        double xyz[3] = {pz_cli_round(x[0], 6), pz_cli_round(x[1], 6), pz_cli_round(x[2], 6)};
+        cJSON *point = cJSON_CreateDoubleArray(xyz, 3);
+        if (!point || !cJSON_AddItemToArray(points, point)) {
+            cJSON_Delete(point);
+            builder->failed = 1;
+        }
+        double uv[2] = {pz_cli_round(report->uv[2 * (size_t)v], 6), pz_cli_round(report->uv[2 * (size_t)v + 1], 6)};
+        cJSON *point_2d = cJSON_CreateDoubleArray(uv, 2);
+        if (!point_2d || !cJSON_AddItemToArray(points_2d, point_2d)) {
+            cJSON_Delete(point_2d);
+            builder->failed = 1;
+        }
+    }
+}
+
+static void add_springmass_result(json_builder *builder, cJSON *object, const pz_flatten_report *report)
+{
+    const pz_springmass_result *r = report->springmass;
+    add_string(builder, object, "relax", report->relax_full ? "full" : "heap");
+    add_bool(builder, object, "orthotropic", report->orthotropic);
+    add_number(builder, object, "phase_one_energy", r->phase_one_energy, 6);
+    add_number(builder, object, "final_energy", r->final_energy, 6);
+    add_number(builder, object, "node_relaxations", (double)r->node_relaxations, 0);
+    add_number(builder, object, "phase_one_relaxations", (double)r->phase_one_relaxations, 0);
+    add_number(builder, object, "energy_evaluations", (double)r->energy_evaluations, 0);
+    add_number(builder, object, "phase_one_ms", r->phase_one_ms, 3);
+    add_number(builder, object, "phase_two_ms", r->phase_two_ms, 3);
+    cJSON *panels = add_array(builder, object, "panels");
+    for (int32_t p = 0; panels && p < r->panel_count; ++p) {
+        const pz_springmass_panel *m = &r->panels[p];
+        cJSON *panel = append_object(builder, panels);
+        if (!panel)
+            return;
+        add_number(builder, panel, "id", m->panel, 0);
+        add_string(builder, panel, "stop", stop_name(m->stop));
+        add_number(builder, panel, "sweeps", m->iterations, 0);
+        add_number(builder, panel, "phase_one_energy", m->phase_one_energy, 6);
+        add_number(builder, panel, "final_energy", m->final_energy, 6);
+        add_number(builder, panel, "E_area", m->e_area, 12);
+        add_number(builder, panel, "E_shape", m->e_shape, 12);
+        add_number(builder, panel, "max_energy_vertex", m->max_energy_vertex, 0);
+        add_string(builder, panel, "seam_kind", seam_kind_name(m->cut_kind));
+        add_number(builder, panel, "cut_opening_mm2", m->cut_opening_mm2, 3);
+        add_number(builder, panel, "cut_energy", m->cut_energy, 6);
+        add_cutting_line(builder, panel, report, m);
+    }
+    /* Indexed by cut-mesh vertex = the vt index of garment.obj. */
+    add_string(builder, object, "energy_map_vertices", "pattern (vt of garment.obj)");
+    add_number(builder, object, "energy_map_count", r->vertex_count, 0);
+    cJSON *map = cJSON_CreateArray();
+    for (int32_t v = 0; map && v < r->vertex_count; ++v) {
+        cJSON *value = cJSON_CreateNumber(pz_cli_round(r->vertex_energy[v], 9) + 0.0);
+        if (!value || !cJSON_AddItemToArray(map, value)) {
+            cJSON_Delete(value);
+            cJSON_Delete(map);
+            map = NULL;
+        }
+    }
+    if (!map || !cJSON_AddItemToObject(object, "energy_map", map)) {
+        cJSON_Delete(map);
+        builder->failed = 1;
+    }
+}
+
+/* backend_result: what the chosen back-end itself reports (the metrics above are shared by all). */
+static void add_backend_result(json_builder *builder, cJSON *root, const pz_flatten_report *report)
+{
+    cJSON *object = add_object(builder, root, "backend_result");
+    if (!object)
+        return;
+    add_string(builder, object, "backend", report->backend);
+    add_number(builder, object, "ms", report->backend_ms, 3);
+    if (report->textile) {
+        add_number(builder, object, "iterations_run", report->textile->iterations_run, 0);
+        add_number(builder, object, "initial_energy", report->textile->initial_energy, 6);
+        add_number(builder, object, "final_energy", report->textile->final_energy, 6);
+        add_bool(builder, object, "converged", report->textile->converged);
+        add_number(builder, object, "damped_steps", report->textile->damped_steps, 0);
+    }
+    if (report->wirewarp)
+        add_wirewarp_result(builder, object, report);
+    if (report->springmass)
+        add_springmass_result(builder, object, report);
 }
 
 static void add_seams_and_darts(json_builder *builder, cJSON *root, const pz_flatten_report *report)
@@ -977,6 +1267,7 @@ cJSON *pz_flatten_report_json(const pz_flatten_report *report)
     add_panels(&builder, root, report);
     add_seams_and_darts(&builder, root, report);
     add_summary(&builder, root, report);
+    add_backend_result(&builder, root, report);
     if (builder.failed) {
         cJSON_Delete(root);
         return NULL;

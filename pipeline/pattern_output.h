@@ -53,6 +53,23 @@ pz_status pz_flatten_read_seam(const char *path, const pz_vertex_space *space, p
  */
 pz_status pz_flatten_read_dart(const char *spec, const pz_vertex_space *space, pz_dart *dart, pz_ctx *ctx);
 
+/** Feature curves read from a --features file (points in mm). */
+typedef struct pz_feature_file {
+    int32_t curve_count;
+    pz_feature_polyline *polylines;   /* curve_count; points point into `points` */
+    double *points;                   /* every curve's points, x 3 */
+} pz_feature_file;
+
+/**
+ * A features file: JSON {"curves":[{"kind":"key"|"accessory","points":
+ * [[x,y,z],...]}]} with at least one curve of at least two points, in the
+ * input's units; mm_per_unit converts to millimetres like the mesh.
+ * PZ_ERR_OPEN when unreadable; PZ_ERR_DATA naming the file and the line (not
+ * JSON) or the curve and point (wrong shape) otherwise.
+ */
+pz_status pz_flatten_read_features(const char *path, double mm_per_unit, pz_feature_file *out, pz_ctx *ctx);
+void pz_feature_file_clear(pz_feature_file *features);
+
 /* ---------------------------------------------------------------- layout and writers */
 
 /**
@@ -89,12 +106,21 @@ typedef struct pz_flatten_report {
     const char *units;            /* the input's units ("mm", "cm", "m") */
     int units_guessed;
     const char *panels_source;    /* "file", "uv", "files", "groups", "components" */
-    const char *backend;          /* "textile" or "lscm" */
+    const char *backend;          /* "textile", "lscm", "wirewarp" or "springmass" */
     int iterations;
     double weights[4];            /* stretch, rigid, dart, seam */
     pz_fabric fabric;             /* the constants used */
     double grain[3];
-    const pz_textile_result *textile;  /* NULL for lscm */
+    const char *grain_source;     /* "given", "vertical axis (y)", "vertical axis (z)" */
+    const pz_textile_result *textile;  /* textile only, else NULL */
+    const pz_wirewarp_result *wirewarp;  /* wirewarp only, else NULL */
+    int progressive;              /* wirewarp: --scheme progressive */
+    int32_t feature_count;        /* wirewarp: curves from --features */
+    const pz_springmass_result *springmass;  /* springmass only, else NULL */
+    int relax_full;               /* springmass: --relax full */
+    int orthotropic;              /* springmass: --fabric given */
+    double backend_ms;            /* the back-end's own run, before layout */
+    const double *uv;             /* the pattern (cutting lines' 2D points) */
     int layout_moved;
     double timings_ms[6];         /* read, pattern, flatten, metrics, write, total */
     const pz_pattern *pattern;

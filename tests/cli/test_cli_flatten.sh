@@ -2,7 +2,8 @@
 # tests/cli/test_cli_flatten.sh -- `panelize flatten` end to end: developable
 # surfaces flatten without strain, a closed tube gets one self-seam of equal
 # sides, a hemisphere stays injective; the real skirt panels keep their seams
-# and darts symmetric; --panels uv finds the T-shirt's 4 panels; garment.obj
+# and darts symmetric; --panels uv finds the T-shirt's 4 panels and the
+# skirt's 4 panels and 8 darts; garment.obj
 # keeps the input's vertices and faces; pattern.svg is well-formed 1:1 SVG;
 # every bad option and bad file fails with its exit code, one line naming the
 # culprit, and nothing written.
@@ -82,6 +83,9 @@ PY
 # ------------------------------------------------------------------ developable surfaces: no strain
 for shape in "cylinder --open" "cone --open"; do
     name=${shape%% *}
+    # The default grain is the taller of y and z (pz_mesh_vertical_axis): the cylinder is 400 mm
+    # tall and 300 mm wide, the cone 300 mm tall but 400 mm wide along x and y.
+    if [ "$name" = cylinder ]; then grain='[0, 0, 1]' axis=z; else grain='[0, 1, 0]' axis=y; fi
     # shellcheck disable=SC2086 # shape holds the name and its flag
     run generate $shape -o "$name.obj" --faces 2000 --quiet
     for backend in textile lscm; do
@@ -94,7 +98,8 @@ for shape in "cylinder --open" "cone --open"; do
             "panel keys" "all(k in p for p in d['panels'] for k in $(echo $panel_keys))" \
             "input keys" "all(k in d['input'] for k in ('file', 'vertices', 'faces', 'poses', 'units'))" \
             "timings" "all(d['timings_ms'][k] >= 0 for k in ('read', 'pattern', 'flatten', 'metrics', 'write', 'total'))" \
-            "parameters" "d['parameters']['backend'] == '$backend' and d['parameters']['grain'] == [0, 0, 1]" \
+            "parameters" "d['parameters']['backend'] == '$backend' and d['parameters']['grain'] == $grain" \
+            "default grain: the vertical axis" "d['parameters']['grain_source'] == 'vertical axis ($axis)'" \
             "one panel" "d['summary']['panel_count'] == 1 == len(d['panels'])" \
             "max_abs_strain < 1e-4" "d['summary']['max_abs_strain'] < 1e-4" \
             "injective" "d['summary']['injective'] is True" \
@@ -125,7 +130,8 @@ expect_ok "flatten hemi.obj"
 report_checks "flatten hemi.obj" hemi \
     "injective" "d['summary']['injective'] is True and d['panels'][0]['flipped_triangles'] == 0" \
     "a sphere cannot flatten without strain" "0.001 < d['summary']['max_abs_strain'] < 1" \
-    "parameters kept" "d['parameters']['iterations'] == 30 and d['parameters']['grain'] == [0, 1, 0] and d['parameters']['fabric']['k_su_N_per_mm'] == 1"
+    "parameters kept" "d['parameters']['iterations'] == 30 and d['parameters']['grain'] == [0, 1, 0] and d['parameters']['fabric']['k_su_N_per_mm'] == 1" \
+    "grain given" "d['parameters']['grain_source'] == 'given'"
 
 # ------------------------------------------------------------------ panels from a file, OBJ groups, poses
 python3 -c "
@@ -214,6 +220,23 @@ if [ -n "$DATA" ] && [ -f "$DATA/garments/diffavatar-tshirt.obj" ]; then
     svg_checks "flatten tshirt --panels uv" tshirt 4
 else
     echo "SKIPPED: the T-shirt (no \$PZ_SHARED_DATA/garments)"
+fi
+
+# ------------------------------------------------------------------ the skirt's CLO3D pattern: 4 panels, 8 darts
+# INVENTORY.md says 3 panels, but the vt islands and the same skirt's DXF both have 4 pieces
+# (docs/pattern.md); the UV cuts that stop inside an island are its darts.
+if [ -n "$DATA" ] && [ -f "$DATA/garments/parafashion-skirt.obj" ]; then
+    K=$DATA/garments/parafashion-skirt.obj
+    run flatten "$K" --panels uv -o skirt-uv --quiet
+    expect_ok "flatten parafashion-skirt.obj --panels uv"
+    report_checks "flatten skirt --panels uv" skirt-uv \
+        "4 panels of 672, 712, 712, 666 faces" "[p['faces'] for p in d['panels']] == [672, 712, 712, 666]" \
+        "4 seams between panels" "len(d['seams']) == 4 and all(s['panels'][0] != s['panels'][1] for s in d['seams'])" \
+        "8 darts, 2 per panel" "sorted(x['panel'] for x in d['darts']) == [0, 0, 1, 1, 2, 2, 3, 3]" \
+        "dart legs of equal length" "all(x['mismatch_rel'] < 0.02 for x in d['darts'])"
+    garment_obj_checks "flatten skirt --panels uv" "$K" skirt-uv 4
+else
+    echo "SKIPPED: the skirt's UV pattern (no \$PZ_SHARED_DATA/garments)"
 fi
 
 # ------------------------------------------------------------------ output directory

@@ -13,7 +13,8 @@
  *  - a torus panel (genus 1) and a closed one refused as PZ_ERR_DATA naming
  *    the panel; bad panel ids and a panel in two pieces refused;
  *  - panels from UVs: two islands, and a tube with a UV seam inside its only
- *    island (an extra cut that becomes the self-seam);
+ *    island (an extra cut that becomes the self-seam); a slit that stops
+ *    inside a flat panel becomes a dart (tip with one copy), not a seam;
  *  - explicit correspondences: a seam between two separate pieces, a seam on
  *    a cut replacing the automatic one, a closed dart cut open;
  *  - ../shared/data/garments/diffavatar-tshirt.obj: 4 UV panels, every one a
@@ -431,6 +432,53 @@ static void test_panels_from_uv(void)
     pz_mesh_free(&tube);
 }
 
+/*
+ * A slit cut into a flat 6 x 6 grid from the boundary at (3, 0) up to the
+ * interior vertex (3, 3) is a dart, not a seam: tip (3, 3) with one copy,
+ * legs from the open end towards the tip, two copies of each leg vertex.
+ */
+static void test_slit_is_dart(void)
+{
+    const int columns = 6, rows = 6, vertex_columns = columns + 1;
+    pz_mesh *grid = test_grid(columns, rows, TEST_GRID_FLAT, 0, &ctx);
+    pz_topology *t = test_topology(grid, &ctx);
+    uint8_t *slit = calloc((size_t)t->edge_count, 1);
+    int32_t *face_panel = calloc((size_t)grid->face_count, sizeof(int32_t));
+    REQUIRE(slit && face_panel, "out of memory");
+    for (int32_t e = 0; e < t->edge_count; ++e) {
+        int32_t h = t->edge_halfedge[2 * e], u = pz_he_from(t, h), v = pz_he_to(t, h);
+        int vertical = u % vertex_columns == 3 && v % vertex_columns == 3;
+        slit[e] = vertical && u / vertex_columns <= 3 && v / vertex_columns <= 3;
+    }
+    pz_pattern *pattern = NULL;
+    REQUIRE_OK(pz_pattern_build(grid, face_panel, slit, NULL, "slit", &pattern, &ctx), ctx);
+    CHECK(panels_are_disks(pattern), "slit grid: one disk");
+    CHECK(pattern->seam_count == 0 && pattern->dart_count == 1, "slit: %d seams, %d darts (want 0, 1)",
+          (int)pattern->seam_count, (int)pattern->dart_count);
+    if (pattern->dart_count == 1) {
+        const pz_dart *dart = &pattern->darts[0];
+        const int32_t *origin = pattern->vertex_origin;
+        CHECK(dart->panel == 0 && dart->pair_count == 3 && origin[dart->tip] == 3 * vertex_columns + 3,
+              "dart: panel %d, %d pairs, tip at garment vertex %d", (int)dart->panel, (int)dart->pair_count,
+              (int)origin[dart->tip]);
+        int legs_ok = 1;
+        for (int32_t i = 0; i < dart->pair_count && i < 3; ++i)
+            legs_ok &= origin[dart->leg_a[i]] == i * vertex_columns + 3 &&
+                       origin[dart->leg_b[i]] == origin[dart->leg_a[i]] &&
+                       dart->leg_a[i] != dart->leg_b[i];
+        CHECK(legs_ok, "dart legs: two copies of (3, 0), (3, 1), (3, 2), from the open end");
+        int32_t tip_copies = 0;
+        for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v)
+            tip_copies += origin[v] == 3 * vertex_columns + 3;
+        CHECK(tip_copies == 1, "the tip has one copy: %d", (int)tip_copies);
+    }
+    pz_pattern_free(&pattern);
+    free(slit);
+    free(face_panel);
+    pz_topology_free(&t);
+    pz_mesh_free(&grid);
+}
+
 /* Two unit-square grids side by side (2 x 2 squares each), separate: pieces 0 (x 0..2) and 1 (x 3..5). */
 static pz_mesh *two_pieces(void)
 {
@@ -758,6 +806,7 @@ int main(void)
     test_panels_from_uv();
     test_explicit();
     test_correspondences_clear();
+    test_slit_is_dart();
     test_shared_tshirt();
     test_shared_skirt();
     if (!test_shared_data())

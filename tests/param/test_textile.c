@@ -16,8 +16,14 @@
  *    (in mm): seam sides equal in length within 0.5%, reflection residual
  *    below 1 mm, dart legs equal within 0.5%, and with the seam term off the
  *    seam residual is larger;
- *  - the jumpsuit front in 3 poses: use_poses changes the pattern and its
- *    worst per-pose RMS strain is no worse than the rest-pose-only pattern's.
+ *  - the jumpsuit front in 3 poses: energies reported per iteration never
+ *    increase, no flipped face, use_poses changes the pattern, and its worst
+ *    strain over the poses is no worse than the rest-only pattern's, as the
+ *    max over poses of the per-pose 95th percentile and as the max over the
+ *    faces well-shaped in every pose (slivers cannot be judged);
+ *  - the diffavatar shirt with its UV islands as panels: no flipped face,
+ *    energies never increase, and with the seam term off the strain is
+ *    below LSCM's (the hemisphere also checks the energy history).
  * Patterns are built by hand (one panel = all faces) so the test does not
  * depend on pz_pattern_build.
  *
@@ -184,6 +190,23 @@ static double mean_grain_angle(const pz_mesh *mesh, const double *uv, const doub
     return sum / weight_sum;
 }
 
+/* Energies reported through on_iteration must not increase. */
+typedef struct energy_trace {
+    int count, increases;
+    double last, first;
+} energy_trace;
+
+static void record_energy(void *user, int iteration, double energy)
+{
+    energy_trace *trace = user;
+    if (iteration == 0)
+        trace->first = energy;
+    else if (energy > trace->last * (1 + 1e-9))
+        ++trace->increases;
+    trace->last = energy;
+    ++trace->count;
+}
+
 /* ------------------------------------------------------------------ tests */
 
 static void test_developable(pz_shape shape)
@@ -265,7 +288,14 @@ static void test_hemisphere(void)
 {
     pz_pattern *pattern = pattern_of(generate(PZ_SHAPE_HEMISPHERE, 3000, 0), NULL, 1);
     pz_textile_result result;
-    double *uv = flatten(pattern, NULL, &result);
+    energy_trace trace = {0};
+    pz_textile_options options = {.on_iteration = record_energy, .user = &trace};
+    double *uv = flatten(pattern, &options, &result);
+    printf("hemisphere: energy %.4g -> %.4g, %d iterations, %d damped\n", result.initial_energy, result.final_energy,
+           result.iterations_run, result.damped_steps);
+    CHECK(trace.increases == 0 && trace.count == result.iterations_run + 1 && trace.first == result.initial_energy &&
+              trace.last == result.final_energy,
+          "hemisphere: %d energies, %d increases", trace.count, trace.increases);
     int flipped = count_flipped(pattern->mesh, uv);
     double max_strain, rms = rms_strain(pattern->mesh, pattern->mesh->positions, uv, &max_strain);
     printf("hemisphere: %d flipped, strain rms %.4f max %.4f, worst edge error %.4f, %d iterations\n", flipped,
@@ -542,6 +572,61 @@ static void test_skirt_seams(void)
     pattern_release(pattern);
 }
 
+/* Shape quality of a 3D triangle: 4 sqrt(3) area / sum of squared edge
+ * lengths, 1 for an equilateral triangle, 0 for a degenerate one. */
+static double triangle_quality(const double *positions, const int32_t *face)
+{
+    const double *a = positions + 3 * face[0], *b = positions + 3 * face[1], *c = positions + 3 * face[2];
+    double ab[3], ac[3], bc[3];
+    for (int d = 0; d < 3; ++d) {
+        ab[d] = b[d] - a[d];
+        ac[d] = c[d] - a[d];
+        bc[d] = c[d] - b[d];
+    }
+    double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]};
+    double squares = 0;
+    for (int d = 0; d < 3; ++d)
+        squares += ab[d] * ab[d] + ac[d] * ac[d] + bc[d] * bc[d];
+    double area = 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    return squares > 0 ? 4 * sqrt(3.0) * area / squares : 0;
+}
+
+static int compare_doubles(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/*
+ * Worst thread strain of a pattern against one pose, in two robust senses:
+ * *p95 = the 95th percentile over faces of max(|warp|, |weft|) strain, and
+ * the return value = the maximum over the faces that are well-shaped
+ * (quality >= 0.05) in every pose: a triangle that is nearly degenerate in
+ * some pose (a sliver of the simulated cloth) has a strain there that says
+ * nothing about the pattern, since no flat triangle can match it.
+ */
+static double pose_strain(const pz_mesh *mesh, const double *positions, const double *uv, const uint8_t *judged,
+                          double *p95)
+{
+    double *values = malloc((size_t)mesh->face_count * sizeof(double));
+    REQUIRE(values, "out of memory");
+    double worst = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const int32_t *face = mesh->faces + 3 * f;
+        double ju[3], jv[3];
+        tangents(positions, face, uv, ju, jv);
+        double su = sqrt(ju[0] * ju[0] + ju[1] * ju[1] + ju[2] * ju[2]) - 1;
+        double sv = sqrt(jv[0] * jv[0] + jv[1] * jv[1] + jv[2] * jv[2]) - 1;
+        values[f] = fmax(fabs(su), fabs(sv));
+        if (judged[f])
+            worst = fmax(worst, values[f]);
+    }
+    qsort(values, (size_t)mesh->face_count, sizeof(double), compare_doubles);
+    *p95 = values[(size_t)(0.95 * (mesh->face_count - 1))];
+    free(values);
+    return worst;
+}
+
 static void test_multipose(void)
 {
     const char *shared = test_shared_data();
@@ -565,28 +650,67 @@ static void test_multipose(void)
     pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, &used);
     REQUIRE(mesh->pose_count == 2, "expected 2 poses, got %d", mesh->pose_count);
     pz_pattern *pattern = pattern_of(mesh, NULL, 1);
-    pz_textile_options rest_only = {0}, all = {.use_poses = 1};
-    double *uv_rest = flatten(pattern, &rest_only, NULL);
-    double *uv_all = flatten(pattern, &all, NULL);
+    energy_trace trace_rest = {0}, trace_all = {0};
+    pz_textile_options rest_only = {.on_iteration = record_energy, .user = &trace_rest};
+    pz_textile_options all = {.use_poses = 1, .on_iteration = record_energy, .user = &trace_all};
+    pz_textile_result result_rest, result_all;
+    double *uv_rest = flatten(pattern, &rest_only, &result_rest);
+    double *uv_all = flatten(pattern, &all, &result_all);
+    printf("jumpsuit: energy %.4g -> %.4g (%d iterations, %d damped) rest-only, %.4g -> %.4g (%d, %d) all poses\n",
+           result_rest.initial_energy, result_rest.final_energy, result_rest.iterations_run, result_rest.damped_steps,
+           result_all.initial_energy, result_all.final_energy, result_all.iterations_run, result_all.damped_steps);
+    CHECK(trace_rest.increases == 0 && trace_all.increases == 0, "jumpsuit: energy rose %d / %d times",
+          trace_rest.increases, trace_all.increases);
+    CHECK(trace_rest.count == result_rest.iterations_run + 1 && trace_all.count == result_all.iterations_run + 1,
+          "jumpsuit: %d / %d energies reported", trace_rest.count, trace_all.count);
+    CHECK(result_rest.final_energy <= result_rest.initial_energy && result_all.final_energy <= result_all.initial_energy,
+          "jumpsuit: final energy above the start");
     double difference = 0;
     for (int32_t v = 0; v < mesh->vertex_count; ++v)
         difference = fmax(difference, hypot(uv_rest[2 * v] - uv_all[2 * v], uv_rest[2 * v + 1] - uv_all[2 * v + 1]));
-    double worst_rest = 0, worst_all = 0;
+    /* Faces judged: well-shaped in every pose. */
+    uint8_t *judged = malloc((size_t)mesh->face_count);
+    REQUIRE(judged, "out of memory");
+    int32_t excluded = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double quality = 1;
+        for (int p = 0; p <= mesh->pose_count; ++p) {
+            const double *positions = p == 0 ? mesh->positions : mesh->poses + (size_t)(p - 1) * mesh->vertex_count * 3;
+            quality = fmin(quality, triangle_quality(positions, mesh->faces + 3 * f));
+        }
+        judged[f] = quality >= 0.05;
+        excluded += !judged[f];
+    }
+    double worst_p95_rest = 0, worst_p95_all = 0, worst_max_rest = 0, worst_max_all = 0;
+    double worst_rms_rest = 0, worst_rms_all = 0;
     for (int p = 0; p <= mesh->pose_count; ++p) {
         const double *positions = p == 0 ? mesh->positions : mesh->poses + (size_t)(p - 1) * mesh->vertex_count * 3;
-        double max_rest, max_all;
-        double rest = rms_strain(mesh, positions, uv_rest, &max_rest);
-        double multi = rms_strain(mesh, positions, uv_all, &max_all);
-        printf("jumpsuit (%s) pose %d: strain rms %.5f (max %.4f) rest-only, %.5f (max %.4f) all poses\n",
-               pz_units_str(used), p, rest, max_rest, multi, max_all);
-        worst_rest = fmax(worst_rest, rest);
-        worst_all = fmax(worst_all, multi);
+        double max_rest, max_all, p95_rest, p95_all, unused;
+        double rms_rest = rms_strain(mesh, positions, uv_rest, &unused);
+        double rms_all = rms_strain(mesh, positions, uv_all, &unused);
+        max_rest = pose_strain(mesh, positions, uv_rest, judged, &p95_rest);
+        max_all = pose_strain(mesh, positions, uv_all, judged, &p95_all);
+        printf("jumpsuit (%s) pose %d: |strain| p95 %.4f / max %.4f / rms %.4f rest-only, %.4f / %.4f / %.4f all "
+               "poses\n", pz_units_str(used), p, p95_rest, max_rest, rms_rest, p95_all, max_all, rms_all);
+        worst_p95_rest = fmax(worst_p95_rest, p95_rest);
+        worst_p95_all = fmax(worst_p95_all, p95_all);
+        worst_max_rest = fmax(worst_max_rest, max_rest);
+        worst_max_all = fmax(worst_max_all, max_all);
+        worst_rms_rest = fmax(worst_rms_rest, rms_rest);
+        worst_rms_all = fmax(worst_rms_all, rms_all);
     }
-    printf("jumpsuit: patterns differ by up to %.3f mm; worst pose rms strain %.5f rest-only, %.5f all poses; "
-           "flipped %d / %d\n", difference, worst_rest, worst_all, count_flipped(mesh, uv_rest),
-           count_flipped(mesh, uv_all));
+    printf("jumpsuit: patterns differ by up to %.3f mm; worst over poses: p95 |strain| %.4f rest-only, %.4f all "
+           "poses; max |strain| over the %d faces well-shaped in every pose (%d excluded) %.4f rest-only, %.4f all "
+           "poses; rms %.4f / %.4f; flipped %d / %d\n",
+           difference, worst_p95_rest, worst_p95_all, mesh->face_count - excluded, excluded, worst_max_rest,
+           worst_max_all, worst_rms_rest, worst_rms_all, count_flipped(mesh, uv_rest), count_flipped(mesh, uv_all));
     CHECK(difference > 1e-3, "use_poses changes nothing (%g mm)", difference);
-    CHECK(worst_all <= worst_rest, "multi-pose worst strain %g > rest-only %g", worst_all, worst_rest);
+    CHECK(worst_p95_all <= worst_p95_rest, "multi-pose worst p95 strain %g > rest-only %g", worst_p95_all,
+          worst_p95_rest);
+    CHECK(worst_max_all <= worst_max_rest, "multi-pose worst max strain %g > rest-only %g", worst_max_all,
+          worst_max_rest);
+    CHECK(count_flipped(mesh, uv_rest) == 0 && count_flipped(mesh, uv_all) == 0, "jumpsuit: flipped faces");
+    free(judged);
     free(uv_rest);
     free(uv_all);
     pattern_release(pattern);
@@ -677,6 +801,81 @@ static void test_bad_input(void)
     pattern_release(pattern);
 }
 
+/*
+ * The diffavatar shirt with its own UV islands as panels (5 panels, 13
+ * seams). Its small collar panel (58 faces) once ended mirrored and torn
+ * (strain 174, 2 flipped faces), because the local/global step is not a
+ * descent step for the stretch terms; with the backtracking every iterate
+ * has no more energy than the one before and no new flipped face. With the
+ * seam term off the result must also beat LSCM's worst strain; with it on,
+ * the neckline/collar seam (not reflection-symmetric: LSCM residual ~100 mm)
+ * costs strain by design, so only the guarantees are checked.
+ */
+static void test_shirt(void)
+{
+    const char *shared = test_shared_data();
+    if (!shared) {
+        printf("shirt: skipped (PZ_SHARED_DATA unset)\n");
+        return;
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%s/garments/diffavatar-shirt.obj", shared);
+    FILE *exists = fopen(path, "r");
+    if (!exists) {
+        printf("shirt: skipped (%s missing)\n", path);
+        return;
+    }
+    fclose(exists);
+    pz_mesh *garment = NULL;
+    REQUIRE_OK(pz_mesh_read(path, &garment, &ctx), ctx);
+    pz_mesh_to_mm(garment, PZ_UNITS_AUTO, NULL);
+    int32_t *face_panel = malloc((size_t)garment->face_count * sizeof(int32_t));
+    REQUIRE(face_panel, "out of memory");
+    int32_t panel_count = 0;
+    uint8_t *cuts = NULL;
+    REQUIRE_OK(pz_pattern_panels_from_uv(garment, face_panel, &panel_count, &cuts, &ctx), ctx);
+    pz_pattern *pattern = NULL;
+    REQUIRE_OK(pz_pattern_build(garment, face_panel, cuts, NULL, path, &pattern, &ctx), ctx);
+    double *uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+    REQUIRE(uv, "out of memory");
+    REQUIRE_OK(pz_param_lscm_pattern(pattern, NULL, uv, &ctx), ctx);
+    pz_metrics *lscm = NULL;
+    REQUIRE_OK(pz_metrics_compute(pattern, uv, 0, NULL, &lscm, &ctx), ctx);
+    for (int run = 0; run < 2; ++run) {
+        energy_trace trace = {0};
+        pz_textile_options options = {.on_iteration = record_energy, .user = &trace};
+        if (run == 1)
+            options = (pz_textile_options){.weights_given = 1, .weight_stretch = 5, .weight_rigid = 1,
+                                           .weight_dart = 5, .weight_seam = 0, .on_iteration = record_energy,
+                                           .user = &trace};
+        pz_textile_result result;
+        REQUIRE_OK(pz_param_textile(pattern, &options, uv, &result, &ctx), ctx);
+        pz_metrics *textile = NULL;
+        REQUIRE_OK(pz_metrics_compute(pattern, uv, 0, NULL, &textile, &ctx), ctx);
+        int32_t flipped = 0;
+        for (int32_t p = 0; p < textile->panel_count; ++p)
+            flipped += textile->panels[p].flipped_triangles;
+        printf("shirt (w_seam %d): %d panels, energy %.4g -> %.4g (%d iterations, %d damped), max |strain| %.4f "
+               "(LSCM %.4f), %d flipped, injective %d\n",
+               run ? 0 : 5, pattern->panel_count, result.initial_energy, result.final_energy, result.iterations_run,
+               result.damped_steps, textile->max_abs_strain, lscm->max_abs_strain, flipped, textile->injective);
+        CHECK(flipped == 0, "shirt: %d flipped faces", flipped);
+        CHECK(trace.increases == 0 && result.final_energy <= result.initial_energy, "shirt: energy rose");
+        CHECK(textile->max_abs_strain < 2, "shirt: max strain %g", textile->max_abs_strain);
+        if (run == 1)
+            CHECK(textile->max_abs_strain <= lscm->max_abs_strain && textile->injective,
+                  "shirt without seams: strain %g, LSCM %g, injective %d", textile->max_abs_strain,
+                  lscm->max_abs_strain, textile->injective);
+        pz_metrics_free(&textile);
+    }
+    pz_metrics_free(&lscm);
+    free(uv);
+    free(cuts);
+    free(face_panel);
+    pz_pattern_free(&pattern);
+    pz_mesh_free(&garment);
+}
+
 int main(void)
 {
     pz_ctx_init(&ctx);
@@ -690,5 +889,6 @@ int main(void)
     test_two_panels();
     test_skirt_seams();
     test_multipose();
+    test_shirt();
     return test_finish();
 }

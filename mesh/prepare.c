@@ -1,0 +1,1311 @@
+/*
+ * mesh/prepare.c -- scan-ready input (issue 8, docs/prepare.md): turns a scan
+ * or an export (millions of faces, slivers, non-manifold vertices, fragments,
+ * unwelded panels) into the manifold, well-shaped mesh the paper assumes
+ * ("otherwise we uniformly remesh with standard tools").
+ *
+ * Steps, in order, on a copy of the input (which is in mm):
+ *  1. weld: vertices closer than --weld join (a uniform grid of cell = twice
+ *     the weld distance hashed into an open-addressing table; each vertex
+ *     looks at the 8 cells its ball meets: O(n) expected; union-find keeps
+ *     the smallest index as the representative, whose position and poses
+ *     the cluster takes; all points in one cell would be O(n^2)). An edge
+ *     whose two faces did not share it before welding is a welded seam: an
+ *     existing seam of the export, kept as a constraint and returned as a
+ *     polyline (a sketch curve for the field stage).
+ *  2. repair: faces with a NaN/Inf corner are dropped; degenerate and
+ *     duplicate faces dropped (pz_mesh_prepare); faces beyond the first two
+ *     on an edge dropped; non-manifold vertices split, one copy per fan
+ *     (corners joined across manifold edges by union-find); faces oriented
+ *     consistently (pz_mesh_prepare). Renumbering by pz_mesh_prepare is
+ *     followed through a temporary extra pose holding each vertex's index
+ *     (poses are compacted with the vertices), so seams survive it.
+ *  3. fragments: components under 1% of the total area are dropped (--keep
+ *     all keeps them). Nothing left is PZ_ERR_INVALID_MESH.
+ *  4. decimate (CGAL edge collapse, mesh/cgal_shim.cpp) when the mesh has
+ *     more than 4x the faces remeshing will produce: down to 2x, seams and
+ *     outline locked, so remeshing works on a small mesh.
+ *  5. remesh (CGAL isotropic_remeshing, Botsch & Kobbelt 2004) to the target
+ *     edge L; by default L gives ~20K equilateral faces:
+ *     F = A / (sqrt(3)/4 L^2)  =>  L = sqrt(4 A / (sqrt(3) F)), corrected
+ *     by up to two more passes when the count misses by over 10%. Outline
+ *     and seams constrained; their corners and crease vertices locked.
+ *  6. poses: each output vertex is projected on the repaired rest mesh
+ *     (AABB tree); its barycentric coordinates in that face place it in every
+ *     other pose, so one connectivity serves all poses. Labels go the same
+ *     way (closest face to each output face's centroid). UVs are dropped.
+ *  7. hausdorff: symmetric sampled distance between the repaired input and
+ *     the output (output vertices and centroids against the input, input
+ *     vertices against the output), per pose, compared to 0.5% of the
+ *     bounding-box diagonal; exceeding it is reported, not fatal.
+ *
+ * Memory: a few arrays of 3F ints and the CGAL structures (~250 B/face for a
+ * Surface_mesh, ~150 B/face for an AABB tree); for a 1M-face input the peak
+ * is ~ 0.35 GB over the input (bench/bench_prepare.c). Failure: every error leaves *out NULL and frees everything.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "mesh.h"
+
+#include "cgal_shim.h"
+#include "internal.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define DEFAULT_WELD_MM 0.01
+#define DEFAULT_FACES 20000
+#define DEFAULT_FRAGMENT_FRACTION 0.01
+#define DEFAULT_ITERATIONS 5
+#define HAUSDORFF_FRACTION 0.005
+/* A target edge giving fewer faces than this is longer than the garment allows. */
+#define MIN_EXPECTED_FACES 100
+#define MAX_EXPECTED_FACES 10000000.0
+/* Decimate first when the input has more than DECIMATE_ABOVE x the faces wanted, down to DECIMATE_TO x. */
+#define DECIMATE_ABOVE 4
+#define DECIMATE_TO 2
+#define SQRT3 1.7320508075688772
+/* Remesh a second time when the face count misses the one asked for by more than this fraction. */
+#define REMESH_FACE_TOLERANCE 0.1
+#define REMESH_CORRECTIONS 2
+
+/* Undirected edges as vertex pairs: the welded seams of the working mesh. */
+typedef struct edge_list {
+    int32_t count;
+    size_t capacity;
+    int32_t *pairs;
+} edge_list;
+
+static int edge_list_add(edge_list *list, int32_t a, int32_t b)
+{
+    if (!pz_grow((void **)&list->pairs, &list->capacity, 2 * (size_t)list->count + 2, sizeof(int32_t)))
+        return 0;
+    list->pairs[2 * list->count] = a < b ? a : b;
+    list->pairs[2 * list->count + 1] = a < b ? b : a;
+    ++list->count;
+    return 1;
+}
+
+typedef struct step_state {
+    pz_ctx *ctx;
+    const char *name;
+    pz_prepare_report *report;
+} step_state;
+
+/* Records a step's outcome and notes it on stderr ("NAME: prepare: STEP: detail"). */
+static void step_done(step_state *state, pz_prepare_step_id id, int ran, double started, const char *fmt, ...)
+    __attribute__((format(printf, 5, 6)));
+static void step_done(step_state *state, pz_prepare_step_id id, int ran, double started, const char *fmt, ...)
+{
+    pz_prepare_step *step = &state->report->steps[id];
+    va_list args;
+    va_start(args, fmt);
+    vsnprintf(step->detail, sizeof step->detail, fmt, args);
+    va_end(args);
+    step->ran = ran;
+    step->seconds = pz_seconds() - started;
+    pz_note(state->ctx, "%s: prepare: %s: %s (%.2f s)", state->name, step->name, step->detail, step->seconds);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Working on faces                                                          */
+/* ------------------------------------------------------------------------ */
+
+
+/* A half-edge keyed by its undirected edge, for sorting. */
+typedef struct halfedge_key {
+    int32_t lo, hi, halfedge, pad;
+} halfedge_key;
+
+static int halfedge_key_compare(const void *pa, const void *pb)
+{
+    const halfedge_key *a = pa, *b = pb;
+    if (a->lo != b->lo)
+        return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi)
+        return a->hi < b->hi ? -1 : 1;
+    return (a->halfedge > b->halfedge) - (a->halfedge < b->halfedge);
+}
+
+/* Every half-edge with its undirected key, sorted: equal edges are adjacent. O(F log F). */
+static halfedge_key *sorted_halfedges(const int32_t *faces, int32_t face_count)
+{
+    size_t count = 3 * (size_t)face_count;
+    halfedge_key *keys = malloc(count * sizeof *keys + 1);
+    if (!keys)
+        return NULL;
+    for (size_t h = 0; h < count; ++h) {
+        int32_t a = faces[h], b = faces[pz_he_next((int32_t)h)];
+        keys[h] = (halfedge_key){a < b ? a : b, a < b ? b : a, (int32_t)h, 0};
+    }
+    qsort(keys, count, sizeof *keys, halfedge_key_compare);
+    return keys;
+}
+
+static size_t group_end(const halfedge_key *keys, size_t count, size_t begin)
+{
+    size_t end = begin + 1;
+    while (end < count && keys[end].lo == keys[begin].lo && keys[end].hi == keys[begin].hi)
+        ++end;
+    return end;
+}
+
+/* ------------------------------------------------------------------------ */
+/* 1. Weld                                                                   */
+/* ------------------------------------------------------------------------ */
+
+typedef struct weld_grid {
+    double cell;
+    size_t mask;      /* table size - 1 (a power of two) */
+    int64_t *key;     /* cell of each slot: 3 per slot */
+    int32_t *slot;    /* first vertex of the cell stored in each slot, -1 empty */
+    int32_t *next;    /* next vertex in the same cell */
+} weld_grid;
+
+static size_t cell_hash(const int64_t cell[3])
+{
+    uint64_t h = (uint64_t)cell[0] * 0x9E3779B97F4A7C15ull ^ (uint64_t)cell[1] * 0xC2B2AE3D27D4EB4Full ^
+                 (uint64_t)cell[2] * 0x165667B19E3779F9ull;
+    return (size_t)(h ^ (h >> 31));
+}
+
+/* The slot holding `cell` or the empty slot where it would go (linear probing). */
+static size_t find_slot(const weld_grid *grid, const int64_t cell[3])
+{
+    size_t s = cell_hash(cell) & grid->mask;
+    while (grid->slot[s] >= 0) {
+        const int64_t *other = grid->key + 3 * s;
+        if (other[0] == cell[0] && other[1] == cell[1] && other[2] == cell[2])
+            return s;
+        s = (s + 1) & grid->mask;
+    }
+    return s;
+}
+
+static int is_finite3(const double *p) { return isfinite(p[0]) && isfinite(p[1]) && isfinite(p[2]); }
+
+/* Coordinates beyond this many cells from the origin are not welded (the cell index would overflow). */
+#define WELD_MAX_CELL 4.0e15
+
+static int weldable(const double *p, double cell)
+{
+    return is_finite3(p) && fabs(p[0]) / cell < WELD_MAX_CELL && fabs(p[1]) / cell < WELD_MAX_CELL &&
+           fabs(p[2]) / cell < WELD_MAX_CELL;
+}
+
+static void insert_vertex(weld_grid *grid, const double *p, int32_t v)
+{
+    int64_t cell[3];
+    for (int k = 0; k < 3; ++k)
+        cell[k] = (int64_t)floor(p[k] / grid->cell);
+    size_t s = find_slot(grid, cell);
+    memcpy(grid->key + 3 * s, cell, sizeof cell);
+    grid->next[v] = grid->slot[s];
+    grid->slot[s] = v;
+}
+
+/* Joins v with the earlier vertices within sqrt(limit) in one cell. */
+static void join_in_cell(const weld_grid *grid, const double *positions, const int64_t cell[3], int32_t v,
+                         double limit, int32_t *parent)
+{
+    const double *p = positions + 3 * (size_t)v;
+    for (int32_t u = grid->slot[find_slot(grid, cell)]; u >= 0; u = grid->next[u]) {
+        if (u >= v)
+            continue;
+        const double *q = positions + 3 * (size_t)u;
+        double dx = p[0] - q[0], dy = p[1] - q[1], dz = p[2] - q[2];
+        if (dx * dx + dy * dy + dz * dz <= limit)
+            pz_union_find_join(parent, u, v);
+    }
+}
+
+/*
+ * parent[v]: union-find of the vertices within `distance`. With cells twice
+ * that size, the ball around a vertex meets at most 8 cells: its own and, on
+ * each axis, the neighbour on the side of the nearer face.
+ */
+static pz_status weld_clusters(const pz_mesh *mesh, double distance, int32_t *parent, pz_ctx *ctx)
+{
+    int32_t n = mesh->vertex_count;
+    weld_grid grid = {2.0 * distance, 0, NULL, NULL, NULL};
+    size_t size = 64;
+    while (size < 2 * (size_t)n)
+        size *= 2;
+    grid.mask = size - 1;
+    grid.slot = malloc(size * sizeof(int32_t));
+    grid.key = malloc(3 * size * sizeof(int64_t));
+    grid.next = malloc((size_t)n * sizeof(int32_t) + 1);
+    if (!grid.slot || !grid.key || !grid.next) {
+        free(grid.slot);
+        free(grid.key);
+        free(grid.next);
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory welding %d vertices", (int)n);
+    }
+    memset(grid.slot, 0xff, size * sizeof(int32_t));
+    const double *pos = mesh->positions;
+    for (int32_t v = 0; v < n; ++v) {
+        parent[v] = v;
+        grid.next[v] = -1;
+        if (weldable(pos + 3 * (size_t)v, grid.cell))
+            insert_vertex(&grid, pos + 3 * (size_t)v, v);
+    }
+    double limit = distance * distance;
+    for (int32_t v = 0; v < n; ++v) {
+        const double *p = pos + 3 * (size_t)v;
+        if (!weldable(p, grid.cell))
+            continue;
+        int64_t cell[3], side[3], probe[3];
+        for (int k = 0; k < 3; ++k) {
+            double scaled = p[k] / grid.cell;
+            cell[k] = (int64_t)floor(scaled);
+            side[k] = scaled - (double)cell[k] < 0.5 ? -1 : 1;
+        }
+        for (int corner = 0; corner < 8; ++corner) {
+            for (int k = 0; k < 3; ++k)
+                probe[k] = cell[k] + ((corner >> k) & 1) * side[k];
+            join_in_cell(&grid, pos, probe, v, limit, parent);
+        }
+    }
+    free(grid.slot);
+    free(grid.key);
+    free(grid.next);
+    return PZ_OK;
+}
+
+/*
+ * Seams: a welded edge whose two faces used different vertex pairs before
+ * welding (they were not twins). old_faces are the faces before renumbering.
+ */
+static pz_status find_welded_seams(const pz_mesh *mesh, const int32_t *old_faces, edge_list *seams, pz_ctx *ctx)
+{
+    halfedge_key *keys = sorted_halfedges(mesh->faces, mesh->face_count);
+    if (!keys)
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory finding welded seams");
+    size_t count = 3 * (size_t)mesh->face_count;
+    for (size_t begin = 0, end; begin < count; begin = end) {
+        end = group_end(keys, count, begin);
+        if (end - begin != 2 || keys[begin].lo == keys[begin].hi)
+            continue;
+        int32_t h1 = keys[begin].halfedge, h2 = keys[begin + 1].halfedge;
+        int twins = old_faces[h1] == old_faces[pz_he_next(h2)] && old_faces[pz_he_next(h1)] == old_faces[h2];
+        if (!twins && !edge_list_add(seams, keys[begin].lo, keys[begin].hi)) {
+            free(keys);
+            return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory finding welded seams");
+        }
+    }
+    free(keys);
+    return PZ_OK;
+}
+
+/* Merges the clusters into their representatives (in place: new index <= old). */
+static void apply_weld(pz_mesh *mesh, int32_t *parent)
+{
+    int32_t n = mesh->vertex_count, kept = 0;
+    int32_t *new_index = parent; /* reused: roots are visited before their members (root = smallest) */
+    for (int32_t v = 0; v < n; ++v) {
+        int32_t root = parent[v]; /* compressed by the caller: the root itself */
+        if (root == v) {
+            memmove(mesh->positions + 3 * (size_t)kept, mesh->positions + 3 * (size_t)v, 3 * sizeof(double));
+            for (size_t p = 0; p < (size_t)mesh->pose_count; ++p)
+                memmove(mesh->poses + (p * (size_t)n + (size_t)kept) * 3,
+                        mesh->poses + (p * (size_t)n + (size_t)v) * 3, 3 * sizeof(double));
+            new_index[v] = -1 - kept++; /* negative: marks a root's final index */
+        } else {
+            new_index[v] = new_index[root]; /* root < v already holds -1 - its index */
+        }
+    }
+    /* Poses were compacted with stride n: close the gaps between them. */
+    for (size_t p = 1; p < (size_t)mesh->pose_count; ++p)
+        memmove(mesh->poses + p * (size_t)kept * 3, mesh->poses + p * (size_t)n * 3,
+                (size_t)kept * 3 * sizeof(double));
+    for (size_t c = 0; c < 3 * (size_t)mesh->face_count; ++c)
+        mesh->faces[c] = -1 - new_index[mesh->faces[c]];
+    mesh->vertex_count = kept;
+}
+
+static pz_status weld(pz_mesh *mesh, double distance, edge_list *seams, int32_t *welded, pz_ctx *ctx)
+{
+    *welded = 0;
+    int32_t n = mesh->vertex_count;
+    int32_t *parent = malloc((size_t)n * sizeof(int32_t) + 1);
+    int32_t *old_faces = malloc(3 * (size_t)mesh->face_count * sizeof(int32_t) + 1);
+    pz_status status = PZ_OK;
+    if (!parent || !old_faces)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory welding %d vertices", (int)n);
+    if (!status)
+        status = weld_clusters(mesh, distance, parent, ctx);
+    if (!status) {
+        /* parent[u] <= u always (the smaller root wins), so one pass in index
+         * order points every vertex straight at its root. */
+        for (int32_t v = 0; v < n; ++v) {
+            parent[v] = parent[parent[v]];
+            *welded += parent[v] != v;
+        }
+        if (*welded) {
+            memcpy(old_faces, mesh->faces, 3 * (size_t)mesh->face_count * sizeof(int32_t));
+            apply_weld(mesh, parent);
+            status = find_welded_seams(mesh, old_faces, seams, ctx);
+        }
+    }
+    free(parent);
+    free(old_faces);
+    return status;
+}
+
+/* ------------------------------------------------------------------------ */
+/* 2. Repair                                                                 */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Runs pz_mesh_prepare quietly while following its vertex renumbering: a
+ * temporary last pose holds each vertex's old index in x (poses are compacted
+ * with the vertices), which then renumbers the seams. *validity gets
+ * pz_mesh_prepare's own status (PZ_ERR_INVALID_MESH when problems remain).
+ */
+static pz_status prepare_tracked(pz_mesh *mesh, const char *name, unsigned flags, edge_list *seams,
+                                 pz_status *validity, pz_ctx *ctx)
+{
+    int32_t old_count = mesh->vertex_count;
+    double *ids = malloc(3 * (size_t)old_count * sizeof(double) + 1);
+    int32_t *new_index = malloc((size_t)old_count * sizeof(int32_t) + 1);
+    if (!ids || !new_index) {
+        free(ids);
+        free(new_index);
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory repairing %d vertices", (int)old_count);
+    }
+    for (int32_t v = 0; v < old_count; ++v) {
+        ids[3 * v] = v;
+        ids[3 * v + 1] = ids[3 * v + 2] = 0.0;
+        new_index[v] = -1;
+    }
+    pz_status status = pz_mesh_add_pose(mesh, ids, ctx);
+    free(ids);
+    if (status) {
+        free(new_index);
+        return status;
+    }
+    int quiet = ctx->quiet;
+    ctx->quiet = 1;
+    *validity = pz_mesh_prepare(mesh, name, flags, ctx);
+    ctx->quiet = quiet;
+    const double *id_pose = mesh->poses + (size_t)(mesh->pose_count - 1) * mesh->vertex_count * 3;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        new_index[(int32_t)id_pose[3 * v]] = v;
+    if (--mesh->pose_count == 0) {
+        free(mesh->poses);
+        mesh->poses = NULL;
+    }
+    int32_t kept = 0;
+    for (int32_t e = 0; e < seams->count; ++e) {
+        int32_t a = new_index[seams->pairs[2 * e]], b = new_index[seams->pairs[2 * e + 1]];
+        if (a >= 0 && b >= 0) {
+            seams->pairs[2 * kept] = a;
+            seams->pairs[2 * kept + 1] = b;
+            ++kept;
+        }
+    }
+    seams->count = kept;
+    free(new_index);
+    return PZ_OK;
+}
+
+static int32_t drop_nonfinite_faces(pz_mesh *mesh, uint8_t *drop)
+{
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        drop[f] = 0;
+        for (int k = 0; k < 3; ++k) {
+            int32_t v = mesh->faces[3 * f + k];
+            drop[f] |= !is_finite3(mesh->positions + 3 * (size_t)v);
+            for (int32_t p = 0; p < mesh->pose_count; ++p)
+                drop[f] |= !is_finite3(mesh->poses + ((size_t)p * mesh->vertex_count + v) * 3);
+        }
+    }
+    return pz_mesh_drop_faces(mesh, drop);
+}
+
+/* Drops every face beyond the first two on an edge. */
+static pz_status drop_nonmanifold_edge_faces(pz_mesh *mesh, uint8_t *drop, int32_t *dropped, pz_ctx *ctx)
+{
+    halfedge_key *keys = sorted_halfedges(mesh->faces, mesh->face_count);
+    if (!keys)
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory checking edges");
+    memset(drop, 0, (size_t)mesh->face_count);
+    size_t count = 3 * (size_t)mesh->face_count;
+    for (size_t begin = 0, end; begin < count; begin = end) {
+        end = group_end(keys, count, begin);
+        for (size_t i = begin + 2; i < end; ++i)
+            drop[pz_he_face(keys[i].halfedge)] = 1;
+    }
+    free(keys);
+    *dropped = pz_mesh_drop_faces(mesh, drop);
+    return PZ_OK;
+}
+
+/* Marks seam half-edges (binary search of each half-edge in the sorted seam list). */
+static int pair_compare(const void *pa, const void *pb)
+{
+    const int32_t *a = pa, *b = pb;
+    return a[0] != b[0] ? (a[0] > b[0]) - (a[0] < b[0]) : (a[1] > b[1]) - (a[1] < b[1]);
+}
+
+static void mark_seam_halfedges(const pz_mesh *mesh, edge_list *seams, uint8_t *is_seam)
+{
+    if (seams->count == 0) { /* qsort and bsearch may not take the NULL of an empty list */
+        memset(is_seam, 0, 3 * (size_t)mesh->face_count);
+        return;
+    }
+    qsort(seams->pairs, (size_t)seams->count, 2 * sizeof(int32_t), pair_compare);
+    for (int32_t h = 0; h < 3 * mesh->face_count; ++h) {
+        int32_t a = mesh->faces[h], b = mesh->faces[pz_he_next(h)];
+        int32_t key[2] = {a < b ? a : b, a < b ? b : a};
+        is_seam[h] = bsearch(key, seams->pairs, (size_t)seams->count, 2 * sizeof(int32_t), pair_compare) != NULL;
+    }
+}
+
+/* Gives every fan of a vertex but the first its own copy (corners joined across two-face edges). */
+static pz_status split_fans(pz_mesh *mesh, int32_t *corner_parent, int32_t *fan_vertex, int32_t *split,
+                            pz_ctx *ctx)
+{
+    size_t corners = 3 * (size_t)mesh->face_count;
+    halfedge_key *keys = sorted_halfedges(mesh->faces, mesh->face_count);
+    uint8_t *taken = calloc((size_t)mesh->vertex_count + 1, 1);
+    int32_t *source = malloc(corners * sizeof(int32_t) + 1);
+    if (!keys || !taken || !source) {
+        free(keys);
+        free(taken);
+        free(source);
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory splitting vertices");
+    }
+    for (size_t c = 0; c < corners; ++c) {
+        corner_parent[c] = (int32_t)c;
+        fan_vertex[c] = -1;
+    }
+    for (size_t begin = 0, end; begin < corners; begin = end) {
+        end = group_end(keys, corners, begin);
+        if (end - begin != 2)
+            continue;
+        int32_t h1 = keys[begin].halfedge, h2 = keys[begin + 1].halfedge;
+        int same_way = mesh->faces[h1] == mesh->faces[h2];
+        pz_union_find_join(corner_parent, h1, same_way ? h2 : pz_he_next(h2));
+        pz_union_find_join(corner_parent, pz_he_next(h1), same_way ? pz_he_next(h2) : h2);
+    }
+    free(keys);
+    int32_t count = mesh->vertex_count;
+    for (size_t c = 0; c < corners; ++c) {
+        int32_t root = pz_union_find_root(corner_parent, (int32_t)c), v = mesh->faces[c];
+        if (fan_vertex[root] < 0) {
+            if (!taken[v]) {
+                taken[v] = 1;
+                fan_vertex[root] = v;
+            } else {
+                source[count - mesh->vertex_count] = v;
+                fan_vertex[root] = count++;
+            }
+        }
+        mesh->faces[c] = fan_vertex[root];
+    }
+    free(taken);
+    *split = count - mesh->vertex_count;
+    pz_status status = PZ_OK;
+    if (*split) {
+        int32_t n = mesh->vertex_count;
+        double *positions = realloc(mesh->positions, 3 * (size_t)count * sizeof(double));
+        double *poses = mesh->pose_count ? malloc((size_t)mesh->pose_count * count * 3 * sizeof(double)) : NULL;
+        if (positions)
+            mesh->positions = positions;
+        if (!positions || (mesh->pose_count && !poses)) {
+            free(poses);
+            free(source);
+            return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory splitting vertices");
+        }
+        for (int32_t i = 0; i < *split; ++i)
+            memcpy(positions + 3 * (size_t)(n + i), positions + 3 * (size_t)source[i], 3 * sizeof(double));
+        for (size_t p = 0; p < (size_t)mesh->pose_count; ++p) {
+            memcpy(poses + p * count * 3, mesh->poses + p * n * 3, (size_t)n * 3 * sizeof(double));
+            for (int32_t i = 0; i < *split; ++i)
+                memcpy(poses + (p * count + n + i) * 3, mesh->poses + (p * n + source[i]) * 3, 3 * sizeof(double));
+        }
+        if (poses) {
+            free(mesh->poses);
+            mesh->poses = poses;
+        }
+        mesh->vertex_count = count;
+    }
+    free(source);
+    return status;
+}
+
+/* Non-manifold edges then vertices; seams are carried by their half-edges. */
+static pz_status make_manifold(pz_mesh *mesh, edge_list *seams, pz_prepare_report *report, pz_ctx *ctx)
+{
+    size_t corners = 3 * (size_t)mesh->face_count;
+    uint8_t *flags = malloc(corners + 1);
+    int32_t *corner_parent = malloc(corners * sizeof(int32_t) + 1);
+    int32_t *fan_vertex = malloc(corners * sizeof(int32_t) + 1);
+    pz_status status = PZ_OK;
+    if (!flags || !corner_parent || !fan_vertex)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory repairing %d faces", (int)mesh->face_count);
+    if (!status)
+        status = drop_nonmanifold_edge_faces(mesh, flags, &report->nonmanifold_edge_faces, ctx);
+    if (!status) {
+        mark_seam_halfedges(mesh, seams, flags);
+        status = split_fans(mesh, corner_parent, fan_vertex, &report->split_vertices, ctx);
+    }
+    if (!status) {
+        seams->count = 0;
+        for (int32_t h = 0; h < 3 * mesh->face_count && !status; ++h)
+            if (flags[h] && mesh->faces[h] < mesh->faces[pz_he_next(h)] &&
+                !edge_list_add(seams, mesh->faces[h], mesh->faces[pz_he_next(h)]))
+                status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory keeping seams");
+    }
+    free(flags);
+    free(corner_parent);
+    free(fan_vertex);
+    return status;
+}
+
+static pz_status repair(pz_mesh *mesh, const char *name, edge_list *seams, pz_prepare_report *report, pz_ctx *ctx)
+{
+    uint8_t *drop = malloc((size_t)mesh->face_count + 1);
+    if (!drop)
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory repairing %d faces", (int)mesh->face_count);
+    report->nonfinite_faces = drop_nonfinite_faces(mesh, drop);
+    free(drop);
+    pz_validation before;
+    pz_status status = pz_mesh_validate(mesh, &before, ctx), validity = PZ_OK;
+    if (status)
+        return status;
+    int32_t faces_before = mesh->face_count;
+    status = prepare_tracked(mesh, name, PZ_REPAIR_DROP_DEGENERATE | PZ_REPAIR_DROP_DUPLICATES, seams, &validity,
+                             ctx);
+    int32_t dropped = faces_before - mesh->face_count;
+    report->degenerate_faces = before.degenerate_faces < dropped ? before.degenerate_faces : dropped;
+    report->duplicate_faces = dropped - report->degenerate_faces;
+    pz_validation_clear(&before);
+    if (!status && mesh->face_count > 0)
+        status = make_manifold(mesh, seams, report, ctx);
+    if (status || mesh->face_count == 0)
+        return status;
+    /* Orientation: pz_mesh_prepare flips the minority of each component (swaps corners 1 and 2). */
+    int32_t *old_second = malloc((size_t)mesh->face_count * sizeof(int32_t) + 1);
+    if (!old_second)
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory orienting faces");
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        old_second[f] = mesh->faces[3 * f + 1];
+    int32_t faces = mesh->face_count, vertices = mesh->vertex_count;
+    status = prepare_tracked(mesh, name, PZ_REPAIR_ORIENT, seams, &validity, ctx);
+    report->flipped_faces = 0;
+    if (!status && mesh->face_count == faces && mesh->vertex_count == vertices)
+        for (int32_t f = 0; f < faces; ++f)
+            report->flipped_faces += mesh->faces[3 * f + 1] != old_second[f];
+    free(old_second);
+    if (!status && validity != PZ_OK)
+        status = validity; /* still invalid (not orientable): pz_mesh_prepare's message names the problem */
+    return status;
+}
+
+/* ------------------------------------------------------------------------ */
+/* 3. Fragments                                                              */
+/* ------------------------------------------------------------------------ */
+
+static pz_status drop_fragments(pz_mesh *mesh, const char *name, double fraction, pz_prepare_keep keep,
+                                edge_list *seams, pz_prepare_report *report, pz_ctx *ctx)
+{
+    int32_t *component = malloc((size_t)mesh->face_count * sizeof(int32_t) + 1);
+    double *face_area = malloc((size_t)mesh->face_count * sizeof(double) + 1);
+    double *area = NULL;
+    uint8_t *drop = NULL;
+    pz_status status = PZ_OK;
+    if (!component || !face_area) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory finding components");
+        goto done;
+    }
+    int32_t count = pz_mesh_face_components(mesh, component, ctx);
+    if (count < 0) {
+        status = (pz_status)count;
+        goto done;
+    }
+    report->components = count;
+    area = calloc((size_t)count + 1, sizeof(double));
+    drop = malloc((size_t)mesh->face_count + 1);
+    if (!area || !drop) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory finding components");
+        goto done;
+    }
+    pz_geom_face_areas(mesh, face_area);
+    double total = 0.0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        area[component[f]] += face_area[f];
+        total += face_area[f];
+    }
+    int32_t largest = 0;
+    for (int32_t c = 1; c < count; ++c)
+        if (area[c] > area[largest])
+            largest = c;
+    if (keep == PZ_PREPARE_KEEP_ALL || count <= 1)
+        goto done;
+    for (int32_t c = 0; c < count; ++c)
+        if (c != largest && area[c] < fraction * total)
+            ++report->dropped_components;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        drop[f] = component[f] != largest && area[component[f]] < fraction * total;
+    if (report->dropped_components) {
+        report->dropped_component_faces = pz_mesh_drop_faces(mesh, drop);
+        pz_status validity = PZ_OK;
+        status = prepare_tracked(mesh, name, 0, seams, &validity, ctx); /* drops the stranded vertices */
+    }
+done:
+    free(component);
+    free(face_area);
+    free(area);
+    free(drop);
+    return status;
+}
+
+/* ------------------------------------------------------------------------ */
+/* 4-5. Decimation and remeshing                                             */
+/* ------------------------------------------------------------------------ */
+
+static pz_cgal_surface surface_view(const pz_mesh *mesh, const edge_list *seams)
+{
+    pz_cgal_surface view = {mesh->vertex_count, mesh->face_count, seams->count, mesh->positions, mesh->faces,
+                            seams->pairs, 0, NULL};
+    return view;
+}
+
+/* Counts one line edge a-b at both ends; the first two neighbours of each vertex are kept. */
+static void add_line_end(int32_t *degree, int32_t *neighbour, int32_t a, int32_t b)
+{
+    if (degree[a] < 0) /* on a crease: locked anyway */
+        return;
+    if (degree[a] < 2)
+        neighbour[2 * a + degree[a]] = b;
+    ++degree[a];
+}
+
+static void add_line_edge(int32_t *degree, int32_t *neighbour, int32_t a, int32_t b)
+{
+    add_line_end(degree, neighbour, a, b);
+    add_line_end(degree, neighbour, b, a);
+}
+
+/* Cosine of the angle between the normals of the faces of half-edges g and h. */
+static double normal_cos(const pz_cgal_surface *surface, int32_t g, int32_t h)
+{
+    double n[2][3];
+    int32_t faces[2] = {pz_he_face(g), pz_he_face(h)};
+    for (int i = 0; i < 2; ++i) {
+        const int32_t *c = surface->faces + 3 * (size_t)faces[i];
+        const double *a = surface->positions + 3 * (size_t)c[0], *b = surface->positions + 3 * (size_t)c[1],
+                     *d = surface->positions + 3 * (size_t)c[2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        n[i][0] = u[1] * w[2] - u[2] * w[1];
+        n[i][1] = u[2] * w[0] - u[0] * w[2];
+        n[i][2] = u[0] * w[1] - u[1] * w[0];
+    }
+    double dot = n[0][0] * n[1][0] + n[0][1] * n[1][1] + n[0][2] * n[1][2];
+    double lengths = sqrt((n[0][0] * n[0][0] + n[0][1] * n[0][1] + n[0][2] * n[0][2]) *
+                          (n[1][0] * n[1][0] + n[1][1] * n[1][1] + n[1][2] * n[1][2]));
+    return lengths > 0.0 ? dot / lengths : 1.0;
+}
+
+/*
+ * Vertices remeshing must keep. Corners of the lines it keeps (outline and
+ * seams): ends, junctions (a seam meeting the outline or another seam), and
+ * turns sharper than CORNER_DEGREES; collapsing one would cut the corner off
+ * the garment. And the vertices of creases (faces folding by more than
+ * CREASE_DEGREES: a collar fold, a pressed pleat): tangential relaxation
+ * would round them off, by up to half an edge.
+ */
+#define CORNER_DEGREES 30.0
+#define CREASE_DEGREES 60.0
+static pz_status find_corners(pz_cgal_surface *surface, pz_ctx *ctx)
+{
+    int32_t n = surface->vertex_count;
+    int32_t *degree = calloc((size_t)n + 1, sizeof(int32_t));
+    int32_t *neighbour = malloc(2 * (size_t)n * sizeof(int32_t) + 1);
+    halfedge_key *keys = sorted_halfedges(surface->faces, surface->face_count);
+    surface->locked = malloc((size_t)n * sizeof(int32_t) + 1);
+    surface->locked_count = 0;
+    if (!degree || !neighbour || !keys || !surface->locked) {
+        free(degree);
+        free(neighbour);
+        free(keys);
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory finding corners");
+    }
+    size_t count = 3 * (size_t)surface->face_count;
+    double crease_cos = cos(CREASE_DEGREES * 3.14159265358979323846 / 180.0);
+    for (size_t begin = 0, end; begin < count; begin = end) {
+        end = group_end(keys, count, begin);
+        if (end == begin + 1)
+            add_line_edge(degree, neighbour, keys[begin].lo, keys[begin].hi);
+        else if (end == begin + 2 && normal_cos(surface, keys[begin].halfedge, keys[begin + 1].halfedge) < crease_cos)
+            degree[keys[begin].lo] = degree[keys[begin].hi] = -1; /* on a crease: locked below */
+    }
+    free(keys);
+    for (int32_t e = 0; e < surface->edge_count; ++e)
+        add_line_edge(degree, neighbour, surface->edges[2 * e], surface->edges[2 * e + 1]);
+    double cos_limit = cos(CORNER_DEGREES * 3.14159265358979323846 / 180.0);
+    for (int32_t v = 0; v < n; ++v) {
+        int corner = degree[v] != 0 && degree[v] != 2; /* ends, junctions and creases (-1) */
+        if (degree[v] == 2) {
+            const double *p = surface->positions + 3 * (size_t)v;
+            const double *a = surface->positions + 3 * (size_t)neighbour[2 * v];
+            const double *b = surface->positions + 3 * (size_t)neighbour[2 * v + 1];
+            double in[3], out[3], dot = 0.0, in_length = 0.0, out_length = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                in[k] = p[k] - a[k];
+                out[k] = b[k] - p[k];
+                dot += in[k] * out[k];
+                in_length += in[k] * in[k];
+                out_length += out[k] * out[k];
+            }
+            corner = dot < cos_limit * sqrt(in_length * out_length);
+        }
+        if (corner)
+            surface->locked[surface->locked_count++] = v;
+    }
+    free(degree);
+    free(neighbour);
+    return PZ_OK;
+}
+
+/* Face fraction whose smallest angle exceeds 20 degrees. */
+static double well_shaped_fraction(const pz_mesh *mesh)
+{
+    if (mesh->face_count == 0)
+        return 1.0;
+    double *angles = malloc(3 * (size_t)mesh->face_count * sizeof(double));
+    if (!angles)
+        return 0.0;
+    pz_geom_corner_angles(mesh, angles);
+    int32_t good = 0;
+    double limit = 20.0 * 3.14159265358979323846 / 180.0;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        good += angles[3 * f] > limit && angles[3 * f + 1] > limit && angles[3 * f + 2] > limit;
+    free(angles);
+    return (double)good / mesh->face_count;
+}
+
+/* ------------------------------------------------------------------------ */
+/* 6-7. Poses, labels and the Hausdorff distance                             */
+/* ------------------------------------------------------------------------ */
+
+/* Barycentric coordinates of p (on the plane of a b c, inside), clamped and normalised. */
+static void barycentric(const double *a, const double *b, const double *c, const double *p, double w[3])
+{
+    double v0[3], v1[3], v2[3];
+    for (int k = 0; k < 3; ++k) {
+        v0[k] = b[k] - a[k];
+        v1[k] = c[k] - a[k];
+        v2[k] = p[k] - a[k];
+    }
+    double d00 = v0[0] * v0[0] + v0[1] * v0[1] + v0[2] * v0[2], d01 = v0[0] * v1[0] + v0[1] * v1[1] + v0[2] * v1[2];
+    double d11 = v1[0] * v1[0] + v1[1] * v1[1] + v1[2] * v1[2], d20 = v2[0] * v0[0] + v2[1] * v0[1] + v2[2] * v0[2];
+    double d21 = v2[0] * v1[0] + v2[1] * v1[1] + v2[2] * v1[2], denominator = d00 * d11 - d01 * d01;
+    if (!(fabs(denominator) > 0.0)) {
+        w[0] = 1.0;
+        w[1] = w[2] = 0.0;
+        return;
+    }
+    w[1] = fmax(0.0, (d11 * d20 - d01 * d21) / denominator);
+    w[2] = fmax(0.0, (d00 * d21 - d01 * d20) / denominator);
+    w[0] = fmax(0.0, 1.0 - w[1] - w[2]);
+    double sum = w[0] + w[1] + w[2];
+    for (int k = 0; k < 3; ++k)
+        w[k] /= sum;
+}
+
+static double distance3(const double *a, const double *b)
+{
+    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* Largest distance from `queries` to the surface (positions, faces). */
+static pz_status max_distance(const double *positions, const pz_mesh *surface, const double *queries,
+                              int32_t query_count, double *result, pz_ctx *ctx)
+{
+    double *closest = malloc(3 * (size_t)query_count * sizeof(double) + 1);
+    int32_t *face = malloc((size_t)query_count * sizeof(int32_t) + 1);
+    pz_status status = PZ_OK;
+    if (!closest || !face)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory measuring distances");
+    if (!status)
+        status = pz_cgal_closest_points(positions, surface->vertex_count, surface->faces, surface->face_count,
+                                        queries, query_count, closest, face, ctx);
+    *result = 0.0;
+    for (int32_t q = 0; !status && q < query_count; ++q)
+        *result = fmax(*result, distance3(queries + 3 * (size_t)q, closest + 3 * (size_t)q));
+    free(closest);
+    free(face);
+    return status;
+}
+
+/* Face centroids of positions (face_count x 3). */
+static double *centroids(const pz_mesh *mesh, const double *positions)
+{
+    double *out = malloc(3 * (size_t)mesh->face_count * sizeof(double) + 1);
+    if (!out)
+        return NULL;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k)
+            out[3 * f + k] = (positions[3 * (size_t)mesh->faces[3 * f] + k] +
+                              positions[3 * (size_t)mesh->faces[3 * f + 1] + k] +
+                              positions[3 * (size_t)mesh->faces[3 * f + 2] + k]) / 3.0;
+    return out;
+}
+
+/* Symmetric sampled Hausdorff distance between two meshes in given positions. */
+static pz_status hausdorff(const pz_mesh *a, const double *a_positions, const pz_mesh *b, const double *b_positions,
+                           double *result, pz_ctx *ctx)
+{
+    double ab = 0.0, ba = 0.0;
+    /* a's vertices and centroids together: one AABB tree of b serves both */
+    double *centres = centroids(a, a_positions);
+    double *samples = centres ? realloc(centres, 3 * ((size_t)a->face_count + (size_t)a->vertex_count) *
+                                                     sizeof(double) + 1)
+                              : NULL;
+    if (!samples) {
+        free(centres);
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory measuring distances");
+    }
+    memcpy(samples + 3 * (size_t)a->face_count, a_positions, 3 * (size_t)a->vertex_count * sizeof(double));
+    pz_status status = max_distance(b_positions, b, samples, a->face_count + a->vertex_count, &ab, ctx);
+    if (!status)
+        status = max_distance(a_positions, a, b_positions, b->vertex_count, &ba, ctx);
+    free(samples);
+    *result = fmax(ab, ba);
+    return status;
+}
+
+/* Places every output vertex in each pose of `input` through its closest point on the rest input. */
+static pz_status transfer_poses(const pz_mesh *input, pz_mesh *output, pz_ctx *ctx)
+{
+    int32_t n = output->vertex_count;
+    double *closest = malloc(3 * (size_t)n * sizeof(double) + 1);
+    int32_t *face = malloc((size_t)n * sizeof(int32_t) + 1);
+    double *poses = malloc((size_t)input->pose_count * n * 3 * sizeof(double) + 1);
+    pz_status status = PZ_OK;
+    if (!closest || !face || !poses)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory transferring poses");
+    if (!status)
+        status = pz_cgal_closest_points(input->positions, input->vertex_count, input->faces, input->face_count,
+                                        output->positions, n, closest, face, ctx);
+    for (int32_t v = 0; !status && v < n; ++v) {
+        const int32_t *corner = input->faces + 3 * (size_t)face[v];
+        double w[3];
+        barycentric(input->positions + 3 * (size_t)corner[0], input->positions + 3 * (size_t)corner[1],
+                    input->positions + 3 * (size_t)corner[2], closest + 3 * (size_t)v, w);
+        for (size_t p = 0; p < (size_t)input->pose_count; ++p) {
+            const double *pose = input->poses + p * input->vertex_count * 3;
+            for (int k = 0; k < 3; ++k)
+                poses[(p * n + v) * 3 + k] = w[0] * pose[3 * (size_t)corner[0] + k] +
+                                             w[1] * pose[3 * (size_t)corner[1] + k] +
+                                             w[2] * pose[3 * (size_t)corner[2] + k];
+        }
+    }
+    free(closest);
+    free(face);
+    if (status) {
+        free(poses);
+        return status;
+    }
+    output->poses = poses;
+    output->pose_count = input->pose_count;
+    return PZ_OK;
+}
+
+/* Each output face takes the label of the input face closest to its centroid. */
+static pz_status transfer_labels(const pz_mesh *input, pz_mesh *output, pz_ctx *ctx)
+{
+    if (!input->face_labels)
+        return PZ_OK;
+    int32_t n = output->face_count;
+    double *centres = centroids(output, output->positions);
+    double *closest = malloc(3 * (size_t)n * sizeof(double) + 1);
+    int32_t *face = malloc((size_t)n * sizeof(int32_t) + 1);
+    output->face_labels = malloc((size_t)n * sizeof(int32_t) + 1);
+    output->label_names = input->label_names ? calloc((size_t)input->label_count + 1, sizeof(char *)) : NULL;
+    output->label_count = input->label_count;
+    pz_status status = PZ_OK;
+    if (!centres || !closest || !face || !output->face_labels || (input->label_names && !output->label_names))
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory transferring labels");
+    for (int32_t l = 0; !status && output->label_names && l < input->label_count; ++l)
+        if (input->label_names[l]) {
+            output->label_names[l] = malloc(strlen(input->label_names[l]) + 1);
+            if (!output->label_names[l])
+                status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory transferring labels");
+            else
+                strcpy(output->label_names[l], input->label_names[l]);
+        }
+    if (!status)
+        status = pz_cgal_closest_points(input->positions, input->vertex_count, input->faces, input->face_count,
+                                        centres, n, closest, face, ctx);
+    for (int32_t f = 0; !status && f < n; ++f)
+        output->face_labels[f] = input->face_labels[face[f]];
+    free(centres);
+    free(closest);
+    free(face);
+    return status; /* on failure the caller frees output with its partial labels */
+}
+
+/* ------------------------------------------------------------------------ */
+/* Seams as polylines                                                        */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Chains the seam edges into polylines: open chains start at vertices whose
+ * seam degree is not 2 (ends and junctions), then the closed loops remain.
+ */
+static pz_status chain_seams(pz_prepare_result *result, const int32_t *pairs, int32_t edge_count, pz_ctx *ctx)
+{
+    int32_t n = result->mesh->vertex_count;
+    int32_t *offset = calloc((size_t)n + 2, sizeof(int32_t));
+    int32_t *adjacent = malloc(2 * (size_t)edge_count * sizeof(int32_t) + 1); /* edge ids per vertex */
+    uint8_t *used = calloc((size_t)edge_count + 1, 1);
+    result->seam_offsets = malloc(((size_t)edge_count + 2) * sizeof(int32_t));
+    result->seam_vertices = malloc(2 * (size_t)edge_count * sizeof(int32_t) + 1);
+    if (!offset || !adjacent || !used || !result->seam_offsets || !result->seam_vertices) {
+        free(offset);
+        free(adjacent);
+        free(used);
+        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory chaining seams");
+    }
+    for (int32_t e = 0; e < 2 * edge_count; ++e)
+        ++offset[pairs[e] + 2];
+    for (int32_t v = 0; v < n; ++v)
+        offset[v + 2] += offset[v + 1];
+    for (int32_t e = 0; e < 2 * edge_count; ++e)
+        adjacent[offset[pairs[e] + 1]++] = e / 2;
+    /* offset[v] .. offset[v+1] now lists v's seam edges */
+    int32_t written = 0;
+    result->seam_offsets[0] = 0;
+    for (int pass = 0; pass < 2; ++pass)
+        for (int32_t start = 0; start < n; ++start) {
+            int32_t degree = offset[start + 1] - offset[start];
+            if (pass == 0 ? (degree == 0 || degree == 2) : degree == 0)
+                continue;
+            for (int32_t i = offset[start]; i < offset[start + 1]; ++i) {
+                if (used[adjacent[i]])
+                    continue;
+                int32_t v = start, e = adjacent[i];
+                result->seam_vertices[written++] = v;
+                while (e >= 0) {
+                    used[e] = 1;
+                    v = pairs[2 * e] == v ? pairs[2 * e + 1] : pairs[2 * e];
+                    result->seam_vertices[written++] = v;
+                    e = -1;
+                    if (offset[v + 1] - offset[v] == 2) /* continue through a plain seam vertex */
+                        for (int32_t j = offset[v]; j < offset[v + 1]; ++j)
+                            if (!used[adjacent[j]])
+                                e = adjacent[j];
+                }
+                result->seam_offsets[++result->seam_count] = written;
+            }
+        }
+    free(offset);
+    free(adjacent);
+    free(used);
+    return PZ_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* The driver                                                                */
+/* ------------------------------------------------------------------------ */
+
+void pz_prepare_result_free(pz_prepare_result **result)
+{
+    if (!result || !*result)
+        return;
+    pz_mesh_free(&(*result)->mesh);
+    free((*result)->seam_offsets);
+    free((*result)->seam_vertices);
+    free(*result);
+    *result = NULL;
+}
+
+typedef struct prepare_plan {
+    double weld, fraction, target_edge;
+    int32_t target_faces;
+    int iterations;
+} prepare_plan;
+
+static void fill_plan(const pz_prepare_options *options, prepare_plan *plan)
+{
+    plan->weld = options->weld_distance == 0.0 ? DEFAULT_WELD_MM : options->weld_distance;
+    plan->fraction = options->fragment_fraction > 0.0 ? options->fragment_fraction : DEFAULT_FRAGMENT_FRACTION;
+    plan->target_faces = options->target_faces > 0 ? options->target_faces : DEFAULT_FACES;
+    plan->target_edge = options->target_edge;
+    plan->iterations = options->iterations > 0 ? options->iterations : DEFAULT_ITERATIONS;
+}
+
+static const char *const step_names[PZ_PREPARE_STEP_COUNT] = {"weld", "repair", "fragments", "decimate",
+                                                              "remesh", "poses", "hausdorff"};
+
+/* Steps 1-3 on *work. */
+static pz_status clean(pz_mesh *work, const char *name, const prepare_plan *plan, pz_prepare_keep keep,
+                       edge_list *seams, step_state *state, pz_ctx *ctx)
+{
+    pz_prepare_report *report = state->report;
+    double started = pz_seconds();
+    pz_status status = PZ_OK;
+    if (plan->weld > 0.0 && (status = weld(work, plan->weld, seams, &report->welded_vertices, ctx)))
+        return status;
+    report->seam_edges = seams->count;
+    if (plan->weld > 0.0)
+        step_done(state, PZ_PREPARE_WELD, report->welded_vertices > 0, started,
+                  "%d vertices welded within %g mm, %d seam edges", (int)report->welded_vertices, plan->weld,
+                  (int)report->seam_edges);
+    else
+        step_done(state, PZ_PREPARE_WELD, 0, started, "off");
+    started = pz_seconds();
+    if ((status = repair(work, name, seams, report, ctx)))
+        return status;
+    if (work->face_count == 0)
+        return pz_error(ctx, PZ_ERR_INVALID_MESH,
+                        "%s: nothing left after repair (%d faces: all degenerate, duplicate or not finite)", name,
+                        (int)report->input_faces);
+    int repaired = report->nonfinite_faces + report->degenerate_faces + report->duplicate_faces +
+                   report->nonmanifold_edge_faces + report->split_vertices + report->flipped_faces;
+    step_done(state, PZ_PREPARE_REPAIR, repaired > 0, started,
+              "dropped %d non-finite, %d degenerate, %d duplicate, %d non-manifold-edge faces; split %d "
+              "non-manifold vertices; flipped %d faces",
+              (int)report->nonfinite_faces, (int)report->degenerate_faces, (int)report->duplicate_faces,
+              (int)report->nonmanifold_edge_faces, (int)report->split_vertices, (int)report->flipped_faces);
+    started = pz_seconds();
+    if ((status = drop_fragments(work, name, plan->fraction, keep, seams, report, ctx)))
+        return status;
+    step_done(state, PZ_PREPARE_FRAGMENTS, report->dropped_components > 0, started,
+              "%d components, dropped %d under %g%% of the area (%d faces)%s", (int)report->components,
+              (int)report->dropped_components, 100.0 * plan->fraction, (int)report->dropped_component_faces,
+              keep == PZ_PREPARE_KEEP_ALL ? "; --keep all" : "");
+    return PZ_OK;
+}
+
+/* The edge length to remesh to; PZ_ERR_USAGE when it would give too few or too many faces. */
+static pz_status choose_edge(const pz_mesh *work, const char *name, const prepare_plan *plan, double *edge,
+                             double *expected_faces, pz_ctx *ctx)
+{
+    double area = pz_geom_total_area(work);
+    *edge = plan->target_edge > 0.0 ? plan->target_edge : sqrt(4.0 * area / (SQRT3 * plan->target_faces));
+    *expected_faces = 4.0 * area / (SQRT3 * *edge * *edge);
+    double longest = sqrt(4.0 * area / (SQRT3 * MIN_EXPECTED_FACES));
+    if (*expected_faces < MIN_EXPECTED_FACES)
+        return pz_error(ctx, PZ_ERR_USAGE,
+                        "%s: target edge %g mm is too long for this garment (area %.0f mm^2: about %.0f faces; at "
+                        "most %.1f mm)", name, *edge, area, *expected_faces, longest);
+    if (*expected_faces > MAX_EXPECTED_FACES)
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: target edge %g mm is too short (about %.0f faces)", name, *edge,
+                        *expected_faces);
+    return PZ_OK;
+}
+
+/* Steps 4-5: *out gets the remeshed surface (positions, faces; seams in out_seams). */
+static pz_status decimate_and_remesh(const pz_mesh *work, const edge_list *seams, const char *name,
+                                     const prepare_plan *plan, pz_mesh **out, pz_cgal_surface *remeshed,
+                                     step_state *state, pz_ctx *ctx)
+{
+    pz_prepare_report *report = state->report;
+    double edge = 0.0, expected = 0.0;
+    pz_status status = choose_edge(work, name, plan, &edge, &expected, ctx);
+    if (status)
+        return status;
+    pz_cgal_surface source = surface_view(work, seams), decimated = {0};
+    double started = pz_seconds();
+    if (work->face_count > DECIMATE_ABOVE * expected) {
+        if ((status = pz_cgal_decimate(&source, (int32_t)(DECIMATE_TO * expected), &decimated, ctx)))
+            return status;
+        source = decimated;
+        report->decimated_faces = decimated.face_count;
+        step_done(state, PZ_PREPARE_DECIMATE, 1, started, "%d -> %d faces (edge collapse)", (int)work->face_count,
+                  (int)decimated.face_count);
+    } else {
+        step_done(state, PZ_PREPARE_DECIMATE, 0, started, "not needed: %d faces, at most %.0f wanted",
+                  (int)work->face_count, DECIMATE_ABOVE * expected);
+    }
+    started = pz_seconds();
+    status = find_corners(&source, ctx);
+    if (!status)
+        status = pz_cgal_remesh(&source, edge, plan->iterations, remeshed, ctx);
+    /* Kept outlines, corners and creases make remeshing overshoot a face count
+     * by 10-30%: up to two corrected passes (faces scale as 1 / edge^2) when asked for faces. */
+    for (int pass = 0; !status && pass < REMESH_CORRECTIONS && plan->target_edge <= 0.0; ++pass) {
+        double miss = remeshed->face_count / expected;
+        if (fabs(miss - 1.0) <= REMESH_FACE_TOLERANCE)
+            break;
+        edge *= sqrt(miss);
+        pz_cgal_surface_clear(remeshed);
+        status = pz_cgal_remesh(&source, edge, plan->iterations, remeshed, ctx);
+    }
+    free(source.locked);
+    pz_cgal_surface_clear(&decimated);
+    if (status)
+        return status;
+    if ((status = pz_mesh_create(remeshed->vertex_count, remeshed->face_count, out, ctx)))
+        return status;
+    memcpy((*out)->positions, remeshed->positions, 3 * (size_t)remeshed->vertex_count * sizeof(double));
+    memcpy((*out)->faces, remeshed->faces, 3 * (size_t)remeshed->face_count * sizeof(int32_t));
+    report->target_edge = edge;
+    step_done(state, PZ_PREPARE_REMESH, 1, started, "edge %.2f mm, %d iterations: %d faces", edge, plan->iterations,
+              (int)remeshed->face_count);
+    return PZ_OK;
+}
+
+/* Steps 6-7 on the remeshed output. */
+static pz_status carry_and_measure(const pz_mesh *work, pz_mesh *output, step_state *state, pz_ctx *ctx)
+{
+    pz_prepare_report *report = state->report;
+    double started = pz_seconds();
+    pz_status status = PZ_OK;
+    if (work->pose_count > 0 && (status = transfer_poses(work, output, ctx)))
+        return status;
+    if ((status = transfer_labels(work, output, ctx)))
+        return status;
+    if (work->pose_count > 0)
+        step_done(state, PZ_PREPARE_POSES, 1, started, "%d poses carried over by barycentric coordinates",
+                  (int)work->pose_count);
+    else
+        step_done(state, PZ_PREPARE_POSES, 0, started, "no extra poses");
+    started = pz_seconds();
+    if ((status = hausdorff(output, output->positions, work, work->positions, &report->hausdorff, ctx)))
+        return status;
+    for (int32_t p = 0; p < work->pose_count; ++p) {
+        double d = 0.0;
+        status = hausdorff(output, output->poses + (size_t)p * output->vertex_count * 3, work,
+                           work->poses + (size_t)p * work->vertex_count * 3, &d, ctx);
+        if (status)
+            return status;
+        report->pose_hausdorff_max = fmax(report->pose_hausdorff_max, d);
+    }
+    report->within_bound = report->hausdorff <= report->hausdorff_bound &&
+                           report->pose_hausdorff_max <= report->hausdorff_bound;
+    step_done(state, PZ_PREPARE_HAUSDORFF, 1, started, "%.3f mm (poses: %.3f mm), bound %.3f mm: %s",
+              report->hausdorff, report->pose_hausdorff_max, report->hausdorff_bound,
+              report->within_bound ? "within" : "EXCEEDED: the shape changed more than 0.5% of the diagonal");
+    return PZ_OK;
+}
+
+/* Auto mode: why remeshing is needed, or NULL when the mesh is fine as it is. */
+static const char *remesh_reason(const pz_mesh *work, const prepare_plan *plan, double well_shaped)
+{
+    if (work->face_count > 2 * plan->target_faces)
+        return "more than twice the faces wanted";
+    if (well_shaped < 0.95)
+        return "more than 5% of the faces have an angle under 20 degrees";
+    return NULL;
+}
+
+static pz_status run_prepare(const pz_mesh *mesh, const pz_prepare_options *options, const char *name,
+                             pz_prepare_result *result, pz_ctx *ctx)
+{
+    pz_prepare_report *report = &result->report;
+    step_state state = {ctx, name, report};
+    prepare_plan plan;
+    fill_plan(options, &plan);
+    report->input_vertices = mesh->vertex_count;
+    report->input_faces = mesh->face_count;
+    pz_mesh *work = NULL;
+    edge_list seams = {0};
+    pz_cgal_surface remeshed = {0};
+    pz_status status = pz_mesh_copy(mesh, &work, ctx);
+    if (!status)
+        status = clean(work, name, &plan, options->keep, &seams, &state, ctx);
+    double lo[3], hi[3];
+    if (!status) {
+        pz_mesh_bbox(work, lo, hi);
+        report->bbox_diagonal = distance3(lo, hi);
+        report->hausdorff_bound = HAUSDORFF_FRACTION * report->bbox_diagonal;
+        report->within_bound = 1;
+    }
+    const char *why = NULL;
+    double well_shaped = status ? 0.0 : well_shaped_fraction(work);
+    if (!status && !options->no_remesh && options->automatic && plan.target_edge <= 0.0)
+        why = remesh_reason(work, &plan, well_shaped);
+    int remesh = !status && !options->no_remesh && (!options->automatic || why || plan.target_edge > 0.0);
+    if (remesh) {
+        status = decimate_and_remesh(work, &seams, name, &plan, &result->mesh, &remeshed, &state, ctx);
+        if (!status)
+            status = carry_and_measure(work, result->mesh, &state, ctx);
+        if (!status)
+            status = chain_seams(result, remeshed.edges, remeshed.edge_count, ctx);
+    } else if (!status) {
+        const char *skip = options->no_remesh ? "off" : "not needed: the mesh is well shaped and small enough";
+        double now = pz_seconds();
+        step_done(&state, PZ_PREPARE_DECIMATE, 0, now, "%s", skip);
+        step_done(&state, PZ_PREPARE_REMESH, 0, now, "%s (%.1f%% of the faces have no angle under 20 degrees)", skip,
+                  100.0 * well_shaped);
+        step_done(&state, PZ_PREPARE_POSES, 0, now, "%d poses kept as they are", (int)work->pose_count);
+        step_done(&state, PZ_PREPARE_HAUSDORFF, 0, now, "geometry unchanged (welding moves vertices by at most %g mm)",
+                  plan.weld > 0.0 ? plan.weld : 0.0);
+        result->mesh = work; /* the result frees it from here on */
+        work = NULL;
+        status = chain_seams(result, seams.pairs, seams.count, ctx);
+    }
+    if (!status) {
+        report->output_vertices = result->mesh->vertex_count;
+        report->output_faces = result->mesh->face_count;
+        report->min_angle_over_20_fraction = well_shaped_fraction(result->mesh);
+    }
+    pz_cgal_surface_clear(&remeshed);
+    free(seams.pairs);
+    pz_mesh_free(&work);
+    return status;
+}
+
+pz_status pz_prepare(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    pz_prepare_options defaults = {0};
+    if (!options)
+        options = &defaults;
+    const char *name = options->name ? options->name : "mesh";
+    if (mesh->face_count == 0 || mesh->vertex_count == 0)
+        return pz_error(ctx, PZ_ERR_INVALID_MESH, "%s: the mesh has no faces", name);
+    if (!isfinite(options->weld_distance) || !isfinite(options->target_edge) || options->target_edge < 0.0 ||
+        options->target_faces < 0)
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: bad preparation options", name);
+    pz_prepare_result *result = calloc(1, sizeof *result);
+    if (!result)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
+    for (int s = 0; s < PZ_PREPARE_STEP_COUNT; ++s)
+        result->report.steps[s].name = step_names[s];
+    pz_status status = run_prepare(mesh, options, name, result, ctx);
+    if (status) {
+        pz_prepare_result_free(&result);
+        return status;
+    }
+    *out = result;
+    return PZ_OK;
+}
+
+pz_status pz_prepare_auto(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out,
+                          pz_ctx *ctx)
+{
+    pz_prepare_options automatic = {0};
+    if (options)
+        automatic = *options;
+    automatic.automatic = 1;
+    return pz_prepare(mesh, &automatic, out, ctx);
+}
+
+pz_status pz_prepare_write_seams(const pz_prepare_result *result, const char *path, pz_ctx *ctx)
+{
+    pz_output out;
+    pz_status status = pz_output_open(&out, path, "w", ctx);
+    if (status)
+        return status;
+    fputs("{\"curves\": [", out.file);
+    for (int32_t s = 0; s < result->seam_count; ++s) {
+        fputs(s ? ",\n  [" : "\n  [", out.file);
+        for (int32_t i = result->seam_offsets[s]; i < result->seam_offsets[s + 1]; ++i) {
+            const double *p = result->mesh->positions + 3 * (size_t)result->seam_vertices[i];
+            fprintf(out.file, "%s[%.6f, %.6f, %.6f]", i > result->seam_offsets[s] ? ", " : "", p[0], p[1], p[2]);
+        }
+        fputc(']', out.file);
+    }
+    fputs(result->seam_count ? "\n]}\n" : "]}\n", out.file);
+    return pz_output_commit(&out, ctx);
+}

@@ -1,0 +1,1242 @@
+/*
+ * param/springmass.c -- spring-mass flattening with strain-energy relaxation
+ * (wang2002 "Surface flattening based on energy model", mccartney2005
+ * "orthotropic pattern flattening", IISERM "heap accelerated flattening").
+ *
+ * Every panel (a disk of the cut mesh) is flattened on its own:
+ *
+ * Seed. A multi-source Dijkstra from the boundary vertices over the edges
+ * gives each vertex its distance to the boundary; a face's medial distance is
+ * the mean over its corners (mccartney2005 Sec. 6). The face farthest from the
+ * boundary is laid down undistorted, turned so that the 3D grain projected
+ * onto it becomes +v (the warp; mccartney2005 Sec. 8).
+ *
+ * Phase one (wang2002 Sec. 6.1, mccartney2005 Sec. 6). Faces that share an
+ * edge with a flattened face wait in a max-heap keyed by medial distance, so
+ * the flattening grows from the middle outward. A face with one unplaced
+ * corner is unconstrained: the corner goes to the intersection of the two
+ * circles with the 3D edge lengths as radii, on the side that keeps the face
+ * counter-clockwise. A face whose three corners are placed is constrained:
+ * its springs join the system, the corner with the highest energy is moved
+ * to its energy minimum (repeated node relaxations), then energy is released:
+ *   full  (wang2002 InitFlatten): sweeps over every placed node until the
+ *         energy varies less than energy_variation or 50 sweeps;
+ *   heap  (IISERM Sec. 3): node energies live in an indexed max-heap and only
+ *         the nodes on one path from the root down the larger children
+ *         (single path, Sec. 3.1), or on up to heap_paths paths whose number
+ *         grows as 2^(level-2) (multi-path, Sec. 3.2, Eq. 5), are relaxed.
+ *
+ * Phase two (wang2002 Sec. 5-6.2): sweeps over all nodes until E_S (Eq. 4)
+ * and E_C (Eq. 6) are both below the accuracy, or the energy (Eq. 3) varies
+ * less than energy_variation, or max_iterations sweeps.
+ *
+ * Node relaxation, isotropic. The force of Eq. 2 (C = 0.5) moves the node as
+ * Eqs. 11-13 with the node starting at rest: dq = dt^2 / (2 m_i) f_i. The
+ * paper drops damping, so a persistent velocity would oscillate forever; and
+ * it calls rho and C scale factors: we fix the scale so that dt^2 / (2 m_i) =
+ * 1 / sum_j C, the largest step for which the move cannot raise the node's
+ * energy (the springs' Hessian is bounded by sum_j C); phase two
+ * over-relaxes it by PHASE_TWO_OMEGA (SOR, see there). Then the overlap
+ * penalty of Eqs. 14-15: for every opposite edge whose distance h_j to the
+ * node has fallen below PENALTY_FRACTION of the 3D distance h_j*, the node is
+ * pushed away from the edge by the shortfall. (The paper's threshold h_j* on
+ * its own would fight the springs wherever a triangle is slightly
+ * compressed; the fraction keeps it to triangles heading for a flip.)
+ *
+ * Node relaxation, orthotropic: the energy is mccartney2005 Eqs. 5-9 over
+ * the node's triangles, 0.5 A (K_su (S_u - 1)^2 + K_sv (S_v - 1)^2 + K_r
+ * phi^2) with u the weft, v the warp of the pattern plane, and the move is
+ * ISERM's (IISERM Sec. 2, Fig. 3): four trial moves of +-delta along u and v,
+ * the best one kept when it lowers the energy; each node's delta grows by 1.5
+ * after a success and halves after a failure. A flipped triangle adds a
+ * barrier so that moves which unflip it are taken.
+ *
+ * Energy map (wang2002 Sec. 6.3): the energy of each vertex (Eq. 1, or a
+ * third of its triangles' orthotropic energy); Eq. 16 interpolates it
+ * linearly inside triangles (energy.svg draws the value at the centroid).
+ * The suggested cutting line is the crest line through the maximum: from the
+ * maximum down to the boundary and from it inward, each step to the
+ * neighbour (closer to / farther from the boundary) with the highest energy,
+ * i.e. the slowest descent; inward it stops at a local maximum of boundary
+ * distance or when the energy falls below a tenth of the maximum.
+ *
+ * Trial cut (mccartney2005 Sec. 4, 7): the panel is cut along that line
+ * (pz_mesh_cut) and flattened again; the two sides of the cut, walked along
+ * the boundary from one mouth through the tip to the other, enclose a
+ * polygon whose signed area is negative when the sides splay apart (a gap:
+ * dart) and positive when they overlap (a gusset), since the boundary walks
+ * with the material on its left.
+ *
+ * Cost: phase one heap O(F log F) plus the paths; full O(F * n * sweeps);
+ * phase two O(n * sweeps). Memory O(n + F). Failure: PZ_ERR_NOMEM;
+ * PZ_ERR_DATA when a panel cannot be reached from its seed through edges.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "param.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define SM_PI 3.14159265358979323846
+#define SM_SPRING_C 0.5          /* wang2002 Sec. 5: C = 0.5 */
+#define PENALTY_FRACTION 0.2     /* Eq. 14 applies when h_j < this * h_j* */
+#define CONSTRAINED_STEPS 20     /* node minimization of a constrained corner */
+#define CREST_STOP_FRACTION 0.1  /* the cutting line ends below this fraction of the maximum energy */
+
+/* ------------------------------------------------------------------------ */
+/* Indexed max-heap over ids with external keys                              */
+/* ------------------------------------------------------------------------ */
+
+typedef struct sm_heap {
+    int32_t count;
+    int32_t *items;     /* heap order */
+    int32_t *where;     /* id -> index in items, -1 when absent */
+    const double *key;  /* id -> key */
+} sm_heap;
+
+static int heap_init(sm_heap *h, int32_t capacity, const double *key)
+{
+    h->count = 0;
+    h->key = key;
+    h->items = malloc((size_t)capacity * sizeof(int32_t) + 1);
+    h->where = malloc((size_t)capacity * sizeof(int32_t) + 1);
+    if (!h->items || !h->where)
+        return 0;
+    for (int32_t i = 0; i < capacity; ++i)
+        h->where[i] = -1;
+    return 1;
+}
+
+static void heap_free(sm_heap *h)
+{
+    free(h->items);
+    free(h->where);
+    h->items = h->where = NULL;
+}
+
+static void heap_swap(sm_heap *h, int32_t a, int32_t b)
+{
+    int32_t ia = h->items[a], ib = h->items[b];
+    h->items[a] = ib;
+    h->items[b] = ia;
+    h->where[ib] = a;
+    h->where[ia] = b;
+}
+
+static void heap_up(sm_heap *h, int32_t i)
+{
+    while (i > 0) {
+        int32_t parent = (i - 1) / 2;
+        if (h->key[h->items[parent]] >= h->key[h->items[i]])
+            break;
+        heap_swap(h, i, parent);
+        i = parent;
+    }
+}
+
+static void heap_down(sm_heap *h, int32_t i)
+{
+    for (;;) {
+        int32_t left = 2 * i + 1, right = left + 1, best = i;
+        if (left < h->count && h->key[h->items[left]] > h->key[h->items[best]])
+            best = left;
+        if (right < h->count && h->key[h->items[right]] > h->key[h->items[best]])
+            best = right;
+        if (best == i)
+            return;
+        heap_swap(h, i, best);
+        i = best;
+    }
+}
+
+/* Inserts id, or restores the order after its key changed. */
+static void heap_update(sm_heap *h, int32_t id)
+{
+    int32_t i = h->where[id];
+    if (i < 0) {
+        i = h->count++;
+        h->items[i] = id;
+        h->where[id] = i;
+    }
+    heap_up(h, i);
+    heap_down(h, h->where[id]);
+}
+
+static int32_t heap_pop(sm_heap *h)
+{
+    int32_t top = h->items[0];
+    heap_swap(h, 0, --h->count);
+    h->where[top] = -1;
+    if (h->count)
+        heap_down(h, 0);
+    return top;
+}
+
+/* ------------------------------------------------------------------------ */
+/* One panel                                                                 */
+/* ------------------------------------------------------------------------ */
+
+typedef struct sm_settings {
+    int heap;               /* 1 heap release, 0 full */
+    int paths;              /* 1 single path, >= 2 multi-path cap */
+    int orthotropic;
+    pz_fabric fabric;
+    double grain[3];
+    int max_iterations, phase_one_iterations;
+    double accuracy, energy_variation;
+} sm_settings;
+
+/* Over-relaxation of the isotropic move in the whole-system sweeps of phase
+ * two: plain Gauss-Seidel moves (omega = 1) spread a long-wavelength error by
+ * one ring per sweep and the energy-variation rule then stops early, far
+ * from the minimum; SOR with omega < 2 converges to the same minimum. */
+#define PHASE_TWO_OMEGA 1.7
+
+typedef struct sm_panel {
+    const pz_mesh *mesh;
+    pz_topology *topology;
+    const sm_settings *settings;
+    int32_t nv, nf, ne;
+    int32_t *edge_vertices;    /* ne x 2 */
+    double *rest;              /* ne: 3D edge lengths d_j */
+    int32_t *vertex_edge_offsets, *vertex_edges;  /* CSR vertex -> edges */
+    int32_t *vertex_face_offsets, *vertex_faces;  /* CSR vertex -> faces */
+    double *height;            /* nf x 3: 3D distance of corner k to its opposite edge (h_j*) */
+    double *area3d;            /* nf */
+    double *boundary_distance; /* nv */
+    double *medial;            /* nf */
+    uint8_t *edge_active, *face_placed, *vertex_placed;
+    int32_t *placed_order, placed_count;
+    double *uv;                /* nv x 2 */
+    double *energy;            /* nv: node energy (relaxation key) */
+    double *delta;             /* nv: orthotropic trial step */
+    double mean_edge;
+    sm_heap node_heap;         /* heap release only */
+    double omega;              /* isotropic move scale: 1, or PHASE_TWO_OMEGA in phase two */
+    long long relaxations, evaluations;
+} sm_panel;
+
+static double dist2d(const double *a, const double *b) { return hypot(a[0] - b[0], a[1] - b[1]); }
+
+static double dist3d(const double *a, const double *b)
+{
+    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+    return sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+}
+
+static void panel_free(sm_panel *p)
+{
+    pz_topology_free(&p->topology);
+    free(p->edge_vertices);
+    free(p->rest);
+    free(p->vertex_edge_offsets);
+    free(p->vertex_edges);
+    free(p->vertex_face_offsets);
+    free(p->vertex_faces);
+    free(p->height);
+    free(p->area3d);
+    free(p->boundary_distance);
+    free(p->medial);
+    free(p->edge_active);
+    free(p->face_placed);
+    free(p->vertex_placed);
+    free(p->placed_order);
+    free(p->energy);
+    free(p->delta);
+    heap_free(&p->node_heap);
+}
+
+/* CSR adjacency: for each of `count` items, its `arity` vertices. */
+static int build_csr(int32_t nv, const int32_t *items, int32_t count, int arity, int32_t **offsets_out,
+                     int32_t **list_out)
+{
+    int32_t *offsets = calloc((size_t)nv + 1, sizeof(int32_t));
+    int32_t *list = malloc((size_t)count * (size_t)arity * sizeof(int32_t) + 1);
+    int32_t *fill = malloc((size_t)nv * sizeof(int32_t) + 1);
+    if (!offsets || !list || !fill) {
+        free(offsets);
+        free(list);
+        free(fill);
+        return 0;
+    }
+    for (int32_t i = 0; i < count * arity; ++i)
+        ++offsets[items[i] + 1];
+    for (int32_t v = 0; v < nv; ++v)
+        offsets[v + 1] += offsets[v];
+    memcpy(fill, offsets, (size_t)nv * sizeof(int32_t));
+    for (int32_t i = 0; i < count * arity; ++i)
+        list[fill[items[i]]++] = i / arity;
+    free(fill);
+    *offsets_out = offsets;
+    *list_out = list;
+    return 1;
+}
+
+/* Multi-source Dijkstra from the boundary over edges (lengths in mm). */
+static int boundary_distances(sm_panel *p)
+{
+    double *key = malloc((size_t)p->nv * sizeof(double) + 1);
+    sm_heap heap = {0};
+    if (!key || !heap_init(&heap, p->nv, key)) {
+        free(key);
+        heap_free(&heap);
+        return 0;
+    }
+    for (int32_t v = 0; v < p->nv; ++v) {
+        p->boundary_distance[v] = p->topology->vertex_on_boundary[v] ? 0 : HUGE_VAL;
+        key[v] = -p->boundary_distance[v];
+        if (p->topology->vertex_on_boundary[v])
+            heap_update(&heap, v);
+    }
+    while (heap.count) {
+        int32_t v = heap_pop(&heap);
+        for (int32_t i = p->vertex_edge_offsets[v]; i < p->vertex_edge_offsets[v + 1]; ++i) {
+            int32_t e = p->vertex_edges[i];
+            int32_t w = p->edge_vertices[2 * e] == v ? p->edge_vertices[2 * e + 1] : p->edge_vertices[2 * e];
+            double d = p->boundary_distance[v] + p->rest[e];
+            if (d < p->boundary_distance[w]) {
+                p->boundary_distance[w] = d;
+                key[w] = -d;
+                heap_update(&heap, w);
+            }
+        }
+    }
+    heap_free(&heap);
+    free(key);
+    return 1;
+}
+
+static pz_status panel_init(sm_panel *p, const pz_mesh *mesh, const sm_settings *settings, double *uv,
+                            pz_ctx *ctx)
+{
+    memset(p, 0, sizeof *p);
+    p->mesh = mesh;
+    p->settings = settings;
+    p->uv = uv;
+    p->omega = 1;
+    pz_status status = pz_topology_build(mesh, &p->topology, ctx);
+    if (status)
+        return status;
+    p->nv = mesh->vertex_count;
+    p->nf = mesh->face_count;
+    p->ne = p->topology->edge_count;
+    size_t nv = (size_t)p->nv, nf = (size_t)p->nf, ne = (size_t)p->ne;
+    p->edge_vertices = malloc(ne * 2 * sizeof(int32_t) + 1);
+    p->rest = malloc(ne * sizeof(double) + 1);
+    p->height = malloc(nf * 3 * sizeof(double) + 1);
+    p->area3d = malloc(nf * sizeof(double) + 1);
+    p->boundary_distance = malloc(nv * sizeof(double) + 1);
+    p->medial = malloc(nf * sizeof(double) + 1);
+    p->edge_active = calloc(ne + 1, 1);
+    p->face_placed = calloc(nf + 1, 1);
+    p->vertex_placed = calloc(nv + 1, 1);
+    p->placed_order = malloc(nv * sizeof(int32_t) + 1);
+    p->energy = calloc(nv + 1, sizeof(double));
+    p->delta = malloc(nv * sizeof(double) + 1);
+    if (!p->edge_vertices || !p->rest || !p->height || !p->area3d || !p->boundary_distance || !p->medial ||
+        !p->edge_active || !p->face_placed || !p->vertex_placed || !p->placed_order || !p->energy || !p->delta)
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    const double *x = mesh->positions;
+    double total = 0;
+    for (int32_t e = 0; e < p->ne; ++e) {
+        int32_t h = p->topology->edge_halfedge[2 * e];
+        p->edge_vertices[2 * e] = pz_he_from(p->topology, h);
+        p->edge_vertices[2 * e + 1] = pz_he_to(p->topology, h);
+        p->rest[e] = dist3d(x + 3 * p->edge_vertices[2 * e], x + 3 * p->edge_vertices[2 * e + 1]);
+        total += p->rest[e];
+    }
+    p->mean_edge = p->ne ? total / p->ne : 1;
+    for (int32_t v = 0; v < p->nv; ++v)
+        p->delta[v] = 0.05 * p->mean_edge;
+    for (int32_t f = 0; f < p->nf; ++f) {
+        const int32_t *c = mesh->faces + 3 * f;
+        const double *a = x + 3 * c[0], *b = x + 3 * c[1], *d = x + 3 * c[2];
+        double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        double twice = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        p->area3d[f] = twice / 2;
+        for (int k = 0; k < 3; ++k) {
+            double opposite = dist3d(x + 3 * c[(k + 1) % 3], x + 3 * c[(k + 2) % 3]);
+            p->height[3 * f + k] = opposite > 0 ? twice / opposite : 0;
+        }
+    }
+    if (!build_csr(p->nv, p->edge_vertices, p->ne, 2, &p->vertex_edge_offsets, &p->vertex_edges) ||
+        !build_csr(p->nv, mesh->faces, p->nf, 3, &p->vertex_face_offsets, &p->vertex_faces) ||
+        !boundary_distances(p))
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    for (int32_t f = 0; f < p->nf; ++f) {
+        const int32_t *c = mesh->faces + 3 * f;
+        p->medial[f] = (p->boundary_distance[c[0]] + p->boundary_distance[c[1]] + p->boundary_distance[c[2]]) / 3;
+    }
+    if (settings->heap && !heap_init(&p->node_heap, p->nv, p->energy))
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    return PZ_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Energies                                                                  */
+/* ------------------------------------------------------------------------ */
+
+static int32_t edge_other(const sm_panel *p, int32_t e, int32_t v)
+{
+    return p->edge_vertices[2 * e] == v ? p->edge_vertices[2 * e + 1] : p->edge_vertices[2 * e];
+}
+
+/* mccartney2005 Eqs. 5-9 of face f with its current 2D corners; flipped faces add a barrier. */
+static double face_orthotropic(const sm_panel *p, int32_t f)
+{
+    const int32_t *c = p->mesh->faces + 3 * f;
+    double p3[3][3], p2[3][2], warp, weft, shear_deg;
+    for (int k = 0; k < 3; ++k) {
+        memcpy(p3[k], p->mesh->positions + 3 * c[k], sizeof p3[k]);
+        memcpy(p2[k], p->uv + 2 * c[k], sizeof p2[k]);
+    }
+    double det = (p2[1][0] - p2[0][0]) * (p2[2][1] - p2[0][1]) - (p2[2][0] - p2[0][0]) * (p2[1][1] - p2[0][1]);
+    const pz_fabric *fabric = &p->settings->fabric;
+    if (det <= 0)
+        return 10 * p->area3d[f] * (fabric->k_su + fabric->k_sv) * (1 - det / (2 * p->area3d[f] + 1e-300));
+    pz_metrics_triangle_strain((const double(*)[3])p3, (const double(*)[2])p2, &warp, &weft, &shear_deg);
+    double phi = shear_deg * SM_PI / 180;
+    return 0.25 * det * (fabric->k_su * weft * weft + fabric->k_sv * warp * warp + fabric->k_r * phi * phi);
+}
+
+/* The node's energy: Eq. 1 over its active springs, or its placed faces' orthotropic energy. */
+static double node_energy(sm_panel *p, int32_t v)
+{
+    double sum = 0;
+    ++p->evaluations;
+    if (p->settings->orthotropic) {
+        for (int32_t i = p->vertex_face_offsets[v]; i < p->vertex_face_offsets[v + 1]; ++i)
+            if (p->face_placed[p->vertex_faces[i]])
+                sum += face_orthotropic(p, p->vertex_faces[i]);
+        return sum;
+    }
+    for (int32_t i = p->vertex_edge_offsets[v]; i < p->vertex_edge_offsets[v + 1]; ++i) {
+        int32_t e = p->vertex_edges[i];
+        if (!p->edge_active[e])
+            continue;
+        double stretch = dist2d(p->uv + 2 * v, p->uv + 2 * edge_other(p, e, v)) - p->rest[e];
+        sum += 0.5 * SM_SPRING_C * stretch * stretch;
+    }
+    return sum;
+}
+
+/* E(Phi), Eq. 3 (orthotropic: the sum over placed faces). */
+static double total_energy(sm_panel *p)
+{
+    double sum = 0;
+    if (p->settings->orthotropic) {
+        for (int32_t f = 0; f < p->nf; ++f)
+            if (p->face_placed[f])
+                sum += face_orthotropic(p, f);
+        return sum;
+    }
+    for (int32_t e = 0; e < p->ne; ++e)
+        if (p->edge_active[e]) {
+            double stretch =
+                dist2d(p->uv + 2 * p->edge_vertices[2 * e], p->uv + 2 * p->edge_vertices[2 * e + 1]) - p->rest[e];
+            sum += SM_SPRING_C * stretch * stretch; /* both ends' Eq. 1 */
+        }
+    return sum;
+}
+
+/* wang2002 Eq. 4 (per triangle) and Eq. 6 (per edge). */
+static void accuracy(const sm_panel *p, double *e_area, double *e_shape)
+{
+    double area_error = 0, area_sum = 0, length_error = 0, length_sum = 0;
+    for (int32_t f = 0; f < p->nf; ++f) {
+        const int32_t *c = p->mesh->faces + 3 * f;
+        const double *a = p->uv + 2 * c[0], *b = p->uv + 2 * c[1], *d = p->uv + 2 * c[2];
+        double area2 = 0.5 * fabs((b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1]));
+        area_error += fabs(p->area3d[f] - area2);
+        area_sum += p->area3d[f];
+    }
+    for (int32_t e = 0; e < p->ne; ++e) {
+        double l2 = dist2d(p->uv + 2 * p->edge_vertices[2 * e], p->uv + 2 * p->edge_vertices[2 * e + 1]);
+        length_error += fabs(p->rest[e] - l2);
+        length_sum += p->rest[e];
+    }
+    *e_area = area_sum > 0 ? area_error / area_sum : 0;
+    *e_shape = length_sum > 0 ? length_error / length_sum : 0;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Node relaxation                                                           */
+/* ------------------------------------------------------------------------ */
+
+/* Eqs. 14-15: pushes v away from every opposite edge it has come too close to. */
+static void overlap_penalty(sm_panel *p, int32_t v)
+{
+    double *q = p->uv + 2 * v, push[2] = {0, 0};
+    for (int32_t i = p->vertex_face_offsets[v]; i < p->vertex_face_offsets[v + 1]; ++i) {
+        int32_t f = p->vertex_faces[i];
+        if (!p->face_placed[f])
+            continue;
+        const int32_t *c = p->mesh->faces + 3 * f;
+        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+        const double *a = p->uv + 2 * c[(k + 1) % 3], *b = p->uv + 2 * c[(k + 2) % 3];
+        double ex = b[0] - a[0], ey = b[1] - a[1], length = hypot(ex, ey);
+        if (length <= 0)
+            continue;
+        double h = (ex * (q[1] - a[1]) - ey * (q[0] - a[0])) / length; /* > 0: v on the face's side */
+        double wanted = PENALTY_FRACTION * p->height[3 * f + k];
+        if (h < wanted) {
+            push[0] += (wanted - h) * -ey / length;
+            push[1] += (wanted - h) * ex / length;
+        }
+    }
+    q[0] += push[0];
+    q[1] += push[1];
+}
+
+/* Eq. 2 force, moved by dq = f / sum C (Eqs. 11-13 from rest, see the header). */
+static void relax_isotropic(sm_panel *p, int32_t v)
+{
+    double force[2] = {0, 0}, stiffness = 0, *q = p->uv + 2 * v;
+    for (int32_t i = p->vertex_edge_offsets[v]; i < p->vertex_edge_offsets[v + 1]; ++i) {
+        int32_t e = p->vertex_edges[i];
+        if (!p->edge_active[e])
+            continue;
+        const double *w = p->uv + 2 * edge_other(p, e, v);
+        double dx = w[0] - q[0], dy = w[1] - q[1], length = hypot(dx, dy);
+        stiffness += SM_SPRING_C;
+        if (length <= 0)
+            continue;
+        double magnitude = SM_SPRING_C * (length - p->rest[e]) / length;
+        force[0] += magnitude * dx;
+        force[1] += magnitude * dy;
+    }
+    if (stiffness > 0) {
+        q[0] += p->omega * force[0] / stiffness;
+        q[1] += p->omega * force[1] / stiffness;
+    }
+}
+
+/* ISERM's four orthogonal trial moves (IISERM Fig. 3) with an adaptive step. */
+static void relax_orthotropic(sm_panel *p, int32_t v)
+{
+    double *q = p->uv + 2 * v, start[2] = {q[0], q[1]};
+    double best = node_energy(p, v), best_q[2] = {q[0], q[1]};
+    static const double directions[4][2] = {{1, 0}, {-1, 0}, {0, 1}, {0, -1}};
+    for (int d = 0; d < 4; ++d) {
+        q[0] = start[0] + p->delta[v] * directions[d][0];
+        q[1] = start[1] + p->delta[v] * directions[d][1];
+        double trial = node_energy(p, v);
+        if (trial < best) {
+            best = trial;
+            best_q[0] = q[0];
+            best_q[1] = q[1];
+        }
+    }
+    int moved = best_q[0] != start[0] || best_q[1] != start[1];
+    q[0] = best_q[0];
+    q[1] = best_q[1];
+    p->delta[v] = moved ? fmin(p->delta[v] * 1.5, 0.5 * p->mean_edge) : fmax(p->delta[v] * 0.5, 1e-9 * p->mean_edge);
+}
+
+static void relax_node(sm_panel *p, int32_t v)
+{
+    ++p->relaxations;
+    if (p->settings->orthotropic)
+        relax_orthotropic(p, v);
+    else
+        relax_isotropic(p, v);
+    overlap_penalty(p, v);
+}
+
+/* Heap mode: recompute the energies a move of v changed (v and its placed neighbours). */
+static void refresh_around(sm_panel *p, int32_t v)
+{
+    if (!p->settings->heap)
+        return;
+    p->energy[v] = node_energy(p, v);
+    heap_update(&p->node_heap, v);
+    for (int32_t i = p->vertex_edge_offsets[v]; i < p->vertex_edge_offsets[v + 1]; ++i) {
+        int32_t w = edge_other(p, p->vertex_edges[i], v);
+        if (p->vertex_placed[w]) {
+            p->energy[w] = node_energy(p, w);
+            heap_update(&p->node_heap, w);
+        }
+    }
+}
+
+/* One Gauss-Seidel sweep over the placed nodes, in placement order. */
+static void sweep(sm_panel *p)
+{
+    for (int32_t i = 0; i < p->placed_count; ++i)
+        relax_node(p, p->placed_order[i]);
+}
+
+/* wang2002 EnergyRelease with the energy-variation and iteration rules (and
+ * the accuracy rule when check_accuracy); returns the stop reason. */
+static int energy_release(sm_panel *p, int max_sweeps, int check_accuracy, int *sweeps_run)
+{
+    double previous = total_energy(p);
+    int stop = PZ_SPRINGMASS_STOP_ITERATIONS, run = 0;
+    for (;;) {
+        if (check_accuracy) {
+            double e_area, e_shape;
+            accuracy(p, &e_area, &e_shape);
+            if (e_area <= p->settings->accuracy && e_shape <= p->settings->accuracy) {
+                stop = PZ_SPRINGMASS_STOP_ACCURACY;
+                break;
+            }
+        }
+        if (run >= max_sweeps)
+            break;
+        sweep(p);
+        ++run;
+        double current = total_energy(p);
+        if (previous <= 0 || fabs(current - previous) <= p->settings->energy_variation * previous) {
+            stop = PZ_SPRINGMASS_STOP_VARIATION;
+            break;
+        }
+        previous = current;
+    }
+    if (sweeps_run)
+        *sweeps_run = run;
+    return stop;
+}
+
+/* IISERM Sec. 3: relax the nodes on the paths from the heap root down the larger children. */
+static void heap_release(sm_panel *p)
+{
+    enum { MAX_WIDTH = 256 };
+    int32_t frontier[MAX_WIDTH], next[2 * MAX_WIDTH], chosen[64 * MAX_WIDTH];
+    int32_t frontier_count = 0, chosen_count = 0, cap = p->settings->paths;
+    if (p->node_heap.count == 0)
+        return;
+    frontier[frontier_count++] = 0;
+    chosen[chosen_count++] = p->node_heap.items[0];
+    for (int level = 2; frontier_count > 0; ++level) {
+        int32_t width = cap <= 1 ? 1 : level <= 3 ? 2 : (level - 2 < 20 ? 1 << (level - 2) : MAX_WIDTH);
+        if (cap > 1 && width > cap)
+            width = cap;
+        if (width > MAX_WIDTH)
+            width = MAX_WIDTH;
+        int32_t next_count = 0;
+        for (int32_t i = 0; i < frontier_count; ++i)
+            for (int32_t child = 2 * frontier[i] + 1; child <= 2 * frontier[i] + 2; ++child)
+                if (child < p->node_heap.count)
+                    next[next_count++] = child;
+        /* keep the `width` children of the largest energies (partial selection sort: width is small) */
+        frontier_count = 0;
+        for (int32_t k = 0; k < next_count && frontier_count < width; ++k) {
+            int32_t best = k;
+            for (int32_t j = k + 1; j < next_count; ++j)
+                if (p->energy[p->node_heap.items[next[j]]] > p->energy[p->node_heap.items[next[best]]])
+                    best = j;
+            int32_t t = next[k];
+            next[k] = next[best];
+            next[best] = t;
+            frontier[frontier_count++] = next[k];
+            if (chosen_count < 64 * MAX_WIDTH)
+                chosen[chosen_count++] = p->node_heap.items[next[k]];
+        }
+    }
+    for (int32_t i = 0; i < chosen_count; ++i)
+        relax_node(p, chosen[i]);
+    for (int32_t i = 0; i < chosen_count; ++i)
+        refresh_around(p, chosen[i]);
+}
+
+/* ------------------------------------------------------------------------ */
+/* Phase one                                                                 */
+/* ------------------------------------------------------------------------ */
+
+static void place_vertex(sm_panel *p, int32_t v)
+{
+    if (p->vertex_placed[v])
+        return;
+    p->vertex_placed[v] = 1;
+    p->placed_order[p->placed_count++] = v;
+}
+
+/* Marks face f flattened: its springs join the system. */
+static void activate_face(sm_panel *p, int32_t f)
+{
+    p->face_placed[f] = 1;
+    for (int k = 0; k < 3; ++k)
+        p->edge_active[p->topology->halfedge_edge[3 * f + k]] = 1;
+}
+
+/* The seed face laid down undistorted with the projected grain along +v. */
+static void lay_seed(sm_panel *p, int32_t f)
+{
+    const int32_t *c = p->mesh->faces + 3 * f;
+    const double *x = p->mesh->positions, *a = x + 3 * c[0], *b = x + 3 * c[1], *d = x + 3 * c[2];
+    double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, e2[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+    double nl = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k)
+        n[k] /= nl;
+    const double *g = p->settings->grain;
+    double gn = g[0] * n[0] + g[1] * n[1] + g[2] * n[2];
+    double bv[3] = {g[0] - gn * n[0], g[1] - gn * n[1], g[2] - gn * n[2]};
+    double bl = sqrt(bv[0] * bv[0] + bv[1] * bv[1] + bv[2] * bv[2]);
+    if (bl < 1e-9) { /* grain along the normal: any in-plane direction */
+        memcpy(bv, e1, sizeof bv);
+        bl = sqrt(bv[0] * bv[0] + bv[1] * bv[1] + bv[2] * bv[2]);
+    }
+    for (int k = 0; k < 3; ++k)
+        bv[k] /= bl;
+    /* b_u = b_v x n, so that (b_u, b_v, n) is right-handed and the face stays counter-clockwise */
+    double bu[3] = {bv[1] * n[2] - bv[2] * n[1], bv[2] * n[0] - bv[0] * n[2], bv[0] * n[1] - bv[1] * n[0]};
+    for (int k = 0; k < 3; ++k) {
+        const double *q = x + 3 * c[k];
+        double r[3] = {q[0] - a[0], q[1] - a[1], q[2] - a[2]};
+        p->uv[2 * c[k]] = r[0] * bu[0] + r[1] * bu[1] + r[2] * bu[2];
+        p->uv[2 * c[k] + 1] = r[0] * bv[0] + r[1] * bv[1] + r[2] * bv[2];
+        place_vertex(p, c[k]);
+    }
+    activate_face(p, f);
+}
+
+/* Unconstrained placement: corner k of f at the circles' intersection left of the other two. */
+static void place_by_circles(sm_panel *p, int32_t f, int k)
+{
+    const int32_t *c = p->mesh->faces + 3 * f;
+    int32_t v1 = c[(k + 1) % 3], v2 = c[(k + 2) % 3], v3 = c[k];
+    const double *x = p->mesh->positions, *p1 = p->uv + 2 * v1, *p2 = p->uv + 2 * v2;
+    double r1 = dist3d(x + 3 * v1, x + 3 * v3), r2 = dist3d(x + 3 * v2, x + 3 * v3);
+    double ex = p2[0] - p1[0], ey = p2[1] - p1[1], d = hypot(ex, ey);
+    double *q = p->uv + 2 * v3;
+    if (d <= 0) {
+        q[0] = p1[0] + r1;
+        q[1] = p1[1];
+    } else {
+        ex /= d;
+        ey /= d;
+        double along = (r1 * r1 - r2 * r2 + d * d) / (2 * d), across2 = r1 * r1 - along * along;
+        double across = across2 > 0 ? sqrt(across2) : 0;
+        /* (v1, v2, v3) is counter-clockwise: v3 lies left of v1 -> v2 */
+        q[0] = p1[0] + along * ex - across * ey;
+        q[1] = p1[1] + along * ey + across * ex;
+    }
+    place_vertex(p, v3);
+}
+
+static void push_neighbours(sm_panel *p, sm_heap *faces, int32_t f)
+{
+    for (int k = 0; k < 3; ++k) {
+        int32_t twin = p->topology->twin[3 * f + k];
+        if (twin >= 0 && !p->face_placed[pz_he_face(twin)])
+            heap_update(faces, pz_he_face(twin));
+    }
+}
+
+static void flatten_face(sm_panel *p, int32_t f)
+{
+    const int32_t *c = p->mesh->faces + 3 * f;
+    int unplaced = -1;
+    for (int k = 0; k < 3; ++k)
+        if (!p->vertex_placed[c[k]])
+            unplaced = k;
+    if (unplaced >= 0) {
+        place_by_circles(p, f, unplaced);
+        activate_face(p, f);
+        for (int k = 0; k < 3; ++k)
+            refresh_around(p, c[k]);
+        return;
+    }
+    /* constrained: move the corner with the highest energy to its minimum, then release */
+    activate_face(p, f);
+    int32_t worst = c[0];
+    double worst_energy = -1;
+    for (int k = 0; k < 3; ++k) {
+        double e = node_energy(p, c[k]);
+        if (e > worst_energy) {
+            worst_energy = e;
+            worst = c[k];
+        }
+    }
+    for (int step = 0; step < CONSTRAINED_STEPS; ++step) {
+        relax_node(p, worst);
+        double e = node_energy(p, worst);
+        int settled = e >= worst_energy * (1 - 1e-6);
+        worst_energy = e;
+        if (settled)
+            break;
+    }
+    for (int k = 0; k < 3; ++k)
+        refresh_around(p, c[k]);
+    if (p->settings->heap)
+        heap_release(p);
+    else
+        energy_release(p, p->settings->phase_one_iterations, 0, NULL);
+}
+
+static pz_status phase_one(sm_panel *p, pz_ctx *ctx)
+{
+    int32_t seed = 0;
+    for (int32_t f = 1; f < p->nf; ++f)
+        if (p->medial[f] > p->medial[seed])
+            seed = f;
+    sm_heap faces = {0};
+    if (!heap_init(&faces, p->nf, p->medial)) {
+        heap_free(&faces);
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    }
+    lay_seed(p, seed);
+    for (int k = 0; k < 3; ++k)
+        refresh_around(p, p->mesh->faces[3 * seed + k]);
+    push_neighbours(p, &faces, seed);
+    int32_t flattened = 1;
+    while (faces.count) {
+        int32_t f = heap_pop(&faces);
+        flatten_face(p, f);
+        push_neighbours(p, &faces, f);
+        ++flattened;
+    }
+    heap_free(&faces);
+    if (flattened != p->nf || p->placed_count != p->nv)
+        return pz_error(ctx, PZ_ERR_DATA, "springmass: a panel of %d faces is not edge-connected (%d reached from its seed)",
+                        (int)p->nf, (int)flattened);
+    return PZ_OK;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Energy map and cutting line                                               */
+/* ------------------------------------------------------------------------ */
+
+/* Per-vertex energy for the map: Eq. 1, or a third of the adjacent faces' energy. */
+static void energy_map(sm_panel *p, double *out)
+{
+    for (int32_t v = 0; v < p->nv; ++v) {
+        double e = node_energy(p, v);
+        out[v] = p->settings->orthotropic ? e / 3 : e;
+    }
+}
+
+/* The crest line (see the header); writes up to nv vertices, returns the count. */
+static int32_t crest_line(const sm_panel *p, const double *map, int32_t *line)
+{
+    int32_t top = 0;
+    for (int32_t v = 1; v < p->nv; ++v)
+        if (map[v] > map[top])
+            top = v;
+    /* toward the boundary: strictly decreasing distance, highest energy first */
+    int32_t count = 0, v = top;
+    line[count++] = v;
+    while (p->boundary_distance[v] > 0) {
+        int32_t best = -1;
+        for (int32_t i = p->vertex_edge_offsets[v]; i < p->vertex_edge_offsets[v + 1]; ++i) {
+            int32_t w = edge_other(p, p->vertex_edges[i], v);
+            if (p->boundary_distance[w] < p->boundary_distance[v] && (best < 0 || map[w] > map[best]))
+                best = w;
+        }
+        if (best < 0)
+            break;
+        line[count++] = v = best;
+    }
+    for (int32_t i = 0; i < count / 2; ++i) { /* boundary first */
+        int32_t t = line[i];
+        line[i] = line[count - 1 - i];
+        line[count - 1 - i] = t;
+    }
+    /* inward: strictly increasing distance while the energy stays up */
+    v = top;
+    for (;;) {
+        int32_t best = -1;
+        for (int32_t i = p->vertex_edge_offsets[v]; i < p->vertex_edge_offsets[v + 1]; ++i) {
+            int32_t w = edge_other(p, p->vertex_edges[i], v);
+            if (p->boundary_distance[w] > p->boundary_distance[v] && (best < 0 || map[w] > map[best]))
+                best = w;
+        }
+        if (best < 0 || map[best] < CREST_STOP_FRACTION * map[top] || count >= p->nv)
+            break;
+        line[count++] = v = best;
+    }
+    return count;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Driver                                                                    */
+/* ------------------------------------------------------------------------ */
+
+typedef struct sm_outcome {
+    int stop, iterations;
+    double phase_one_energy, final_energy, e_area, e_shape;
+    double phase_one_ms, phase_two_ms;
+    long long relaxations, phase_one_relaxations, evaluations;
+} sm_outcome;
+
+/* Flattens one disk mesh into uv (nv x 2); fills map (nv, may be NULL) and
+ * line/line_count (may be NULL). */
+static pz_status flatten_disk(const pz_mesh *mesh, const sm_settings *settings, double *uv, double *map,
+                              int32_t *line, int32_t *line_count, sm_outcome *outcome, pz_ctx *ctx)
+{
+    sm_panel p;
+    double start = pz_seconds();
+    pz_status status = panel_init(&p, mesh, settings, uv, ctx);
+    if (!status)
+        status = phase_one(&p, ctx);
+    if (status) {
+        panel_free(&p);
+        return status;
+    }
+    outcome->phase_one_ms = 1e3 * (pz_seconds() - start);
+    outcome->phase_one_relaxations = p.relaxations;
+    outcome->phase_one_energy = total_energy(&p);
+    start = pz_seconds();
+    p.omega = PHASE_TWO_OMEGA;
+    outcome->stop = energy_release(&p, settings->max_iterations, 1, &outcome->iterations);
+    outcome->phase_two_ms = 1e3 * (pz_seconds() - start);
+    outcome->final_energy = total_energy(&p);
+    accuracy(&p, &outcome->e_area, &outcome->e_shape);
+    if (map)
+        energy_map(&p, map);
+    if (map && line)
+        *line_count = crest_line(&p, map, line);
+    outcome->relaxations = p.relaxations;
+    outcome->evaluations = p.evaluations;
+    panel_free(&p);
+    return PZ_OK;
+}
+
+/* Signed area between the two sides of the cut (> 0: they splay apart). */
+static double cut_opening(const pz_mesh *cut, const int32_t *cut_origin, const double *uv, const int32_t *line,
+                          int32_t line_count, pz_ctx *ctx, pz_status *status)
+{
+    pz_topology *topology = NULL;
+    pz_loops *loops = NULL;
+    double opening = 0;
+    *status = pz_topology_build(cut, &topology, ctx);
+    if (!*status)
+        *status = pz_topology_boundary_loops(topology, &loops, ctx);
+    if (*status) {
+        pz_topology_free(&topology);
+        return 0;
+    }
+    int32_t tip = line[line_count - 1], reach = line_count - 1;
+    for (int32_t l = 0; l < loops->loop_count; ++l) {
+        const int32_t *loop = loops->loop_vertices + loops->loop_offsets[l];
+        int32_t n = loops->loop_offsets[l + 1] - loops->loop_offsets[l];
+        for (int32_t i = 0; i < n; ++i) {
+            if (cut_origin[loop[i]] != tip || n < 2 * reach + 1)
+                continue;
+            int ok = 1;
+            double twice = 0;
+            for (int32_t j = -reach; j < reach; ++j) {
+                int32_t a = loop[((i + j) % n + n) % n], b = loop[((i + j + 1) % n + n) % n];
+                int32_t k = j < 0 ? -j : j;
+                ok &= cut_origin[a] == line[line_count - 1 - k];
+                twice += uv[2 * a] * uv[2 * b + 1] - uv[2 * b] * uv[2 * a + 1];
+            }
+            int32_t first = loop[((i - reach) % n + n) % n], last = loop[(i + reach) % n];
+            ok &= cut_origin[last] == line[0];
+            twice += uv[2 * last] * uv[2 * first + 1] - uv[2 * first] * uv[2 * last + 1];
+            if (ok)
+                opening = -twice / 2; /* the boundary keeps the material on its left: a gap is clockwise */
+        }
+    }
+    pz_loops_free(&loops);
+    pz_topology_free(&topology);
+    return opening;
+}
+
+/* Cuts the panel along its line, flattens it again and classifies the cut. */
+static pz_status trial_cut(const pz_mesh *panel_mesh, const sm_settings *settings, const int32_t *line,
+                           int32_t line_count, pz_springmass_panel *out, pz_ctx *ctx)
+{
+    pz_topology *topology = NULL;
+    pz_mesh *cut = NULL;
+    int32_t *origin = NULL;
+    uint8_t *flags = NULL;
+    double *uv = NULL;
+    pz_status status = pz_topology_build(panel_mesh, &topology, ctx);
+    if (status)
+        return status;
+    flags = calloc((size_t)topology->edge_count + 1, 1);
+    if (!flags) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+        goto done;
+    }
+    for (int32_t i = 0; i + 1 < line_count; ++i) {
+        int32_t h = topology->vertex_halfedge[line[i]], start = h;
+        /* walk the outgoing half-edges of line[i] to find the edge to line[i + 1] */
+        do {
+            if (pz_he_to(topology, h) == line[i + 1] || pz_he_from(topology, pz_he_prev(h)) == line[i + 1]) {
+                int32_t e = pz_he_to(topology, h) == line[i + 1] ? topology->halfedge_edge[h]
+                                                                  : topology->halfedge_edge[pz_he_prev(h)];
+                flags[e] = 1;
+                break;
+            }
+            int32_t twin = topology->twin[pz_he_prev(h)];
+            h = twin;
+        } while (h >= 0 && h != start);
+    }
+    status = pz_mesh_cut(panel_mesh, topology, flags, &cut, &origin, ctx);
+    if (status)
+        goto done;
+    uv = malloc((size_t)cut->vertex_count * 2 * sizeof(double) + 1);
+    if (!uv) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+        goto done;
+    }
+    sm_outcome outcome = {0};
+    status = flatten_disk(cut, settings, uv, NULL, NULL, NULL, &outcome, ctx);
+    if (status)
+        goto done;
+    out->cut_energy = outcome.final_energy;
+    out->cut_opening_mm2 = cut_opening(cut, origin, uv, line, line_count, ctx, &status);
+    double area = pz_geom_total_area(panel_mesh);
+    out->cut_kind = fabs(out->cut_opening_mm2) <= 1e-6 * area ? PZ_SEAM_KIND_NONE
+                    : out->cut_opening_mm2 > 0               ? PZ_SEAM_KIND_DART
+                                                             : PZ_SEAM_KIND_GUSSET;
+done:
+    free(uv);
+    free(flags);
+    free(origin);
+    pz_mesh_free(&cut);
+    pz_topology_free(&topology);
+    return status;
+}
+
+void pz_springmass_result_clear(pz_springmass_result *result)
+{
+    if (!result)
+        return;
+    free(result->vertex_energy);
+    for (int32_t i = 0; i < result->panel_count && result->panels; ++i)
+        free(result->panels[i].cut_vertices);
+    free(result->panels);
+    memset(result, 0, sizeof *result);
+}
+
+static void settings_from(const pz_springmass_options *options, sm_settings *s)
+{
+    pz_springmass_options zero = {0};
+    if (!options)
+        options = &zero;
+    memset(s, 0, sizeof *s);
+    s->heap = options->relax == 0;
+    s->paths = options->heap_paths > 1 ? options->heap_paths : 1;
+    s->orthotropic = options->orthotropic;
+    s->fabric.k_su = options->fabric.k_su > 0 ? options->fabric.k_su : 0.946;
+    s->fabric.k_sv = options->fabric.k_sv > 0 ? options->fabric.k_sv : 0.548;
+    s->fabric.k_r = options->fabric.k_r > 0 ? options->fabric.k_r : 0.159;
+    double z[3] = {0, 0, 1};
+    memcpy(s->grain, options->grain_given ? options->grain : z, sizeof s->grain);
+    s->max_iterations = options->max_iterations > 0 ? options->max_iterations : 1000;
+    s->phase_one_iterations = options->phase_one_iterations > 0 ? options->phase_one_iterations : 50;
+    s->accuracy = options->accuracy > 0 ? options->accuracy : 0.01;
+    s->energy_variation = options->energy_variation > 0 ? options->energy_variation : 0.0005;
+}
+
+/* One panel of the pattern: extract, flatten, write back, fill its record. */
+static pz_status flatten_panel(const pz_pattern *pattern, int32_t panel, const int32_t *faces, int32_t face_count,
+                               const sm_settings *settings, int do_trial_cut, double *uv,
+                               pz_springmass_result *result, pz_ctx *ctx)
+{
+    pz_mesh *mesh = NULL;
+    int32_t *vertex_map = NULL, *line = NULL, line_count = 0;
+    double *local_uv = NULL, *map = NULL;
+    if (face_count == 0)
+        return pz_error(ctx, PZ_ERR_DATA, "springmass: panel %d has no faces", (int)panel);
+    pz_status status = pz_mesh_extract(pattern->mesh, faces, face_count, &mesh, &vertex_map, NULL, ctx);
+    if (status)
+        return status;
+    size_t nv = (size_t)mesh->vertex_count;
+    local_uv = malloc(nv * 2 * sizeof(double) + 1);
+    map = malloc(nv * sizeof(double) + 1);
+    line = malloc(nv * sizeof(int32_t) + 1);
+    if (!local_uv || !map || !line) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+        goto done;
+    }
+    sm_outcome outcome = {0};
+    status = flatten_disk(mesh, settings, local_uv, map, line, &line_count, &outcome, ctx);
+    if (status)
+        goto done;
+    for (size_t v = 0; v < nv; ++v) {
+        uv[2 * vertex_map[v]] = local_uv[2 * v];
+        uv[2 * vertex_map[v] + 1] = local_uv[2 * v + 1];
+    }
+    if (!result)
+        goto done;
+    pz_springmass_panel *record = &result->panels[panel];
+    record->panel = panel;
+    record->stop = outcome.stop;
+    record->iterations = outcome.iterations;
+    record->phase_one_energy = outcome.phase_one_energy;
+    record->final_energy = outcome.final_energy;
+    record->e_area = outcome.e_area;
+    record->e_shape = outcome.e_shape;
+    int32_t top = 0;
+    for (size_t v = 0; v < nv; ++v) {
+        result->vertex_energy[vertex_map[v]] = map[v];
+        if (map[v] > map[top])
+            top = (int32_t)v;
+    }
+    record->max_energy_vertex = vertex_map[top];
+    if (do_trial_cut && line_count >= 2)
+        status = trial_cut(mesh, settings, line, line_count, record, ctx);
+    record->cut_vertices = malloc((size_t)line_count * sizeof(int32_t) + 1);
+    if (!record->cut_vertices) {
+        status = status ? status : pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+        goto done;
+    }
+    for (int32_t i = 0; i < line_count; ++i)
+        record->cut_vertices[i] = vertex_map[line[i]];
+    record->cut_vertex_count = line_count;
+    result->phase_one_energy += outcome.phase_one_energy;
+    result->final_energy += outcome.final_energy;
+    result->node_relaxations += outcome.relaxations;
+    result->phase_one_relaxations += outcome.phase_one_relaxations;
+    result->energy_evaluations += outcome.evaluations;
+    result->phase_one_ms += outcome.phase_one_ms;
+    result->phase_two_ms += outcome.phase_two_ms;
+done:
+    free(line);
+    free(map);
+    free(local_uv);
+    free(vertex_map);
+    pz_mesh_free(&mesh);
+    return status;
+}
+
+pz_status pz_param_springmass(const pz_pattern *pattern, const pz_springmass_options *options, double *uv,
+                              pz_springmass_result *result, pz_ctx *ctx)
+{
+    sm_settings settings;
+    settings_from(options, &settings);
+    if (result)
+        memset(result, 0, sizeof *result);
+    const pz_mesh *mesh = pattern->mesh;
+    int32_t np = pattern->panel_count;
+    int32_t *offsets = calloc((size_t)np + 1, sizeof(int32_t));
+    int32_t *order = malloc((size_t)mesh->face_count * sizeof(int32_t) + 1);
+    if (!offsets || !order) {
+        free(offsets);
+        free(order);
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    }
+    /* faces grouped by panel (counting sort keeps their order) */
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        ++offsets[pattern->face_panel[f] + 1];
+    for (int32_t p = 0; p < np; ++p)
+        offsets[p + 1] += offsets[p];
+    int32_t *fill = malloc((size_t)np * sizeof(int32_t) + 1);
+    pz_status status = PZ_OK;
+    if (!fill)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    if (!status && result) {
+        result->vertex_count = mesh->vertex_count;
+        result->panel_count = np;
+        result->vertex_energy = calloc((size_t)mesh->vertex_count + 1, sizeof(double));
+        result->panels = calloc((size_t)np + 1, sizeof(pz_springmass_panel));
+        if (!result->vertex_energy || !result->panels)
+            status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    }
+    if (!status) {
+        memcpy(fill, offsets, (size_t)np * sizeof(int32_t));
+        for (int32_t f = 0; f < mesh->face_count; ++f)
+            order[fill[pattern->face_panel[f]]++] = f;
+    }
+    int do_trial_cut = options && options->trial_cut;
+    for (int32_t p = 0; p < np && !status; ++p)
+        status = flatten_panel(pattern, p, order + offsets[p], offsets[p + 1] - offsets[p], &settings, do_trial_cut,
+                               uv, result, ctx);
+    free(fill);
+    free(order);
+    free(offsets);
+    if (status && result)
+        pz_springmass_result_clear(result);
+    return status;
+}
+
+/* ------------------------------------------------------------------------ */
+/* energy.svg                                                                */
+/* ------------------------------------------------------------------------ */
+
+/* Blue (low) to red (high) through green and yellow. */
+static void energy_colour(double t, int rgb[3])
+{
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    double r = t < 0.5 ? 0 : t < 0.75 ? (t - 0.5) * 4 : 1;
+    double g = t < 0.25 ? t * 4 : t < 0.75 ? 1 : (1 - t) * 4;
+    double b = t < 0.25 ? 1 : t < 0.5 ? (0.5 - t) * 4 : 0;
+    rgb[0] = (int)(255 * r + 0.5);
+    rgb[1] = (int)(255 * g + 0.5);
+    rgb[2] = (int)(255 * b + 0.5);
+}
+
+pz_status pz_springmass_write_energy_svg(const pz_pattern *pattern, const double *uv,
+                                         const pz_springmass_result *result, const char *path, pz_ctx *ctx)
+{
+    const pz_mesh *mesh = pattern->mesh;
+    int32_t np = pattern->panel_count;
+    double *box = malloc((size_t)np * 4 * sizeof(double) + 1), *shift = malloc((size_t)np * 2 * sizeof(double) + 1);
+    if (!box || !shift) {
+        free(box);
+        free(shift);
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", path);
+    }
+    for (int32_t p = 0; p < np; ++p) {
+        box[4 * p] = box[4 * p + 1] = HUGE_VAL;
+        box[4 * p + 2] = box[4 * p + 3] = -HUGE_VAL;
+    }
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            const double *q = uv + 2 * mesh->faces[3 * f + k];
+            double *b = box + 4 * pattern->face_panel[f];
+            b[0] = fmin(b[0], q[0]);
+            b[1] = fmin(b[1], q[1]);
+            b[2] = fmax(b[2], q[0]);
+            b[3] = fmax(b[3], q[1]);
+        }
+    /* panels side by side, 20 mm apart; SVG y runs down, so v is negated */
+    double x = 10, height = 0;
+    for (int32_t p = 0; p < np; ++p) {
+        shift[2 * p] = x - box[4 * p];
+        shift[2 * p + 1] = 10 + box[4 * p + 3];
+        x += box[4 * p + 2] - box[4 * p] + 20;
+        height = fmax(height, box[4 * p + 3] - box[4 * p + 1]);
+    }
+    double top = 0;
+    for (int32_t v = 0; result && v < result->vertex_count; ++v)
+        top = fmax(top, result->vertex_energy[v]);
+    pz_output out;
+    pz_status status = pz_output_open(&out, path, "w", ctx);
+    if (status) {
+        free(box);
+        free(shift);
+        return status;
+    }
+    FILE *file = out.file;
+    fprintf(file,
+            "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" "
+            "width=\"%.3fmm\" height=\"%.3fmm\" viewBox=\"0 0 %.3f %.3f\">\n",
+            x - 10, height + 20, x - 10, height + 20);
+    fprintf(file, "<!-- spring-mass energy map (wang2002 Sec. 6.3): blue low, red high; max %.6g -->\n", top);
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const int32_t *c = mesh->faces + 3 * f;
+        const double *s = shift + 2 * pattern->face_panel[f];
+        double mean = 0;
+        for (int k = 0; k < 3 && result; ++k)
+            mean += result->vertex_energy[c[k]] / 3;
+        int rgb[3];
+        energy_colour(top > 0 ? mean / top : 0, rgb);
+        fprintf(file, "<polygon fill=\"#%02x%02x%02x\" stroke=\"none\" points=\"", rgb[0], rgb[1], rgb[2]);
+        for (int k = 0; k < 3; ++k)
+            fprintf(file, "%.3f,%.3f ", uv[2 * c[k]] + s[0], s[1] - uv[2 * c[k] + 1]);
+        fprintf(file, "\"/>\n");
+    }
+    for (int32_t p = 0; result && p < result->panel_count; ++p) {
+        const pz_springmass_panel *record = &result->panels[p];
+        const double *s = shift + 2 * p;
+        fprintf(file, "<polyline fill=\"none\" stroke=\"black\" stroke-width=\"1\" points=\"");
+        for (int32_t i = 0; i < record->cut_vertex_count; ++i) {
+            const double *q = uv + 2 * record->cut_vertices[i];
+            fprintf(file, "%.3f,%.3f ", q[0] + s[0], s[1] - q[1]);
+        }
+        fprintf(file, "\"/>\n");
+    }
+    fprintf(file, "</svg>\n");
+    free(box);
+    free(shift);
+    return pz_output_commit(&out, ctx);
+}

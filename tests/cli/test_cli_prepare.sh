@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# tests/cli/test_cli_prepare.sh -- `panelize prepare` end to end: a generated
+# bodice is remeshed to about the faces asked for (or the --edge given),
+# stays within the Hausdorff bound, comes out valid (`panelize check`);
+# --json reports every step with its counts; seams.json is a sketch file that
+# `panelize field --sketch` accepts; poses come out with the same connectivity;
+# --repair only welds and repairs; bad options and bad input (an empty file,
+# nothing left after repair, an edge longer than the garment) fail with their
+# exit code, one line naming the culprit, and nothing written.
+#
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -u
+
+source "$(dirname "$0")/lib.sh"
+
+run generate bodice -o bodice.obj --faces 12000 --poses 1 --quiet
+expect_ok "generate"
+
+# ------------------------------------------------------------------ a plain run with --json
+run prepare bodice.obj -o dest/prepared.obj --faces 5000 --json
+check "prepare into a missing directory fails" [ "$rc" -eq 73 ]
+mkdir dest
+run prepare bodice.obj -o dest/prepared.obj --faces 5000 --json
+expect_ok "prepare --faces 5000"
+json_checks "prepare --json" \
+    "every step is reported" 'sorted(d["steps"]) == sorted(["weld","repair","fragments","decimate","remesh","poses","hausdorff"])' \
+    "each step has ran, detail, ms" 'all(set(s) == {"ran","detail","ms"} for s in d["steps"].values())' \
+    "remeshing ran" 'd["steps"]["remesh"]["ran"] is True' \
+    "about 5000 faces" 'abs(d["counts"]["output_faces"] - 5000) < 500' \
+    "within the Hausdorff bound" 'd["within_bound"] is True and 0 <= d["hausdorff_mm"] < d["hausdorff_bound_mm"]' \
+    "the bound is 0.5% of the diagonal" 'abs(d["hausdorff_bound_mm"] - 0.005 * d["bbox_diagonal_mm"]) < 1e-3' \
+    "well shaped" 'd["min_angle_over_20_fraction"] > 0.99' \
+    "input counts" 'd["counts"]["input_faces"] > 11000'
+check "the steps are on stderr" grep -q 'remesh' "$WORK/err"
+check "prepared.obj written" [ -s dest/prepared.obj ]
+check "seams.json beside it" [ -s dest/seams.json ]
+run check dest/prepared.obj
+expect_ok "the prepared mesh passes check"
+
+# ------------------------------------------------------------------ --edge, poses
+run prepare bodice.obj --pose bodice.pose1.obj -o posed.obj --edge 15 --json --quiet
+expect_ok "prepare --edge 15 with a pose"
+json_checks "prepare --edge" \
+    "target edge 15" 'd["target_edge_mm"] == 15' \
+    "one pose" 'd["counts"]["poses"] == 1 and d["pose_files"] == ["posed.pose1.obj"]' \
+    "pose within the bound" 'd["pose_hausdorff_mm"] < d["hausdorff_bound_mm"]'
+check "--quiet leaves stderr empty" [ ! -s "$WORK/err" ]
+check "the pose has the rest pose's faces" python3 - posed.obj posed.pose1.obj <<'PY'
+import sys
+def read(path):
+    v, f = 0, []
+    for line in open(path):
+        if line.startswith('v '): v += 1
+        elif line.startswith('f '): f.append([c.split('/')[0] for c in line.split()[1:]])
+    return v, f
+a, b = read(sys.argv[1]), read(sys.argv[2])
+assert a == b and a[0] > 0
+PY
+
+# ------------------------------------------------------------------ unwelded panels: seams come back
+python3 - bodice.obj panels.obj <<'PY'
+import math, sys
+v, f = [], []
+for line in open(sys.argv[1]):
+    t = line.split()
+    if t and t[0] == 'v': v.append(t[1:4])
+    elif t and t[0] == 'f': f.append([int(c.split('/')[0]) - 1 for c in t[1:]])
+# split by the sign of x of each face's centroid: every vertex is copied per side
+out_v, copy, faces = [], {}, []
+for face in f:
+    side = sum(float(v[i][0]) for i in face) > 0
+    ids = []
+    for i in face:
+        if (i, side) not in copy:
+            copy[(i, side)] = len(out_v)
+            out_v.append(v[i])
+        ids.append(copy[(i, side)] + 1)
+    faces.append(ids)
+with open(sys.argv[2], 'w') as out:
+    for p in out_v: out.write('v %s %s %s\n' % tuple(p))
+    for ids in faces: out.write('f %d %d %d\n' % tuple(ids))
+PY
+run prepare panels.obj -o welded.obj --json --quiet
+expect_ok "prepare the unwelded panels"
+json_checks "welding" \
+    "vertices welded" 'd["counts"]["welded_vertices"] > 0' \
+    "seam edges found" 'd["counts"]["seam_edges"] > 0' \
+    "two seam curves" 'd["counts"]["seam_curves"] == 2' \
+    "one component" 'd["counts"]["components"] == 1'
+check "seams.json has two curves of points" json_true \
+    'len(d["curves"]) == 2 and all(len(c) > 5 and all(len(p) == 3 for p in c) for c in d["curves"])' seams.json
+run field welded.obj --sketch seams.json -o field --quiet
+expect_ok "field --sketch seams.json"
+
+# ------------------------------------------------------------------ --repair: no remeshing
+run prepare panels.obj -o repaired.ply --repair --json --quiet
+expect_ok "prepare --repair"
+json_checks "--repair" \
+    "no remeshing" 'd["steps"]["remesh"]["ran"] is False and d["steps"]["decimate"]["ran"] is False' \
+    "faces kept" 'd["counts"]["output_faces"] == d["counts"]["input_faces"]'
+
+# ------------------------------------------------------------------ errors
+rm -f seams.json
+: >empty.obj
+expect_error 65 empty.obj --absent e.obj --absent seams.json -- prepare empty.obj -o e.obj
+printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n' >line.obj
+expect_error 65 "nothing left" --absent l.obj --absent seams.json -- prepare line.obj -o l.obj
+expect_error 64 "too long" --absent big.obj --absent seams.json -- prepare bodice.obj -o big.obj --edge 5000
+expect_error 64 "--edge" --absent x.obj -- prepare bodice.obj -o x.obj --edge -3
+expect_error 64 "--weld" --absent x.obj -- prepare bodice.obj -o x.obj --weld abc
+expect_error 64 "--keep" --absent x.obj -- prepare bodice.obj -o x.obj --keep some
+expect_error 64 "not both" --absent x.obj -- prepare bodice.obj -o x.obj --edge 5 --faces 100
+expect_error 64 "-o" -- prepare bodice.obj
+expect_error 64 "x.txt" -- prepare bodice.obj -o x.txt
+expect_error 66 "missing.obj" --absent x.obj -- prepare missing.obj -o x.obj
+
+finish

@@ -1,0 +1,410 @@
+/*
+ * tests/mesh/test_prepare.c -- scan-ready input (mesh/prepare.c, issue 8):
+ *  - a generated bodice corrupted on purpose (vertex noise, 1% duplicated
+ *    faces, three non-manifold vertices, 20 tiny fragments, a slice of
+ *    slivers) comes out manifold, single-component, well shaped (smallest
+ *    angle over 20 degrees for 99% of faces) and within 0.5% of the diagonal
+ *    of the CLEAN bodice (measured here, independently of the report);
+ *  - the bodice split into 4 unwelded panels welds back into one surface and
+ *    its 4 seams come back as 4 curves lying on the panel borders, with or
+ *    without remeshing;
+ *  - poses stay in correspondence: every pose has the output's vertices, and
+ *    each lies within the bound of its own input pose;
+ *  - automatic mode leaves a clean mesh alone and says why;
+ *  - bad input: nothing left after repair, a target edge longer than the
+ *    garment, an empty mesh: an error, *out NULL;
+ *  - every shared garment (../shared/data/garments) passes through unchanged
+ *    in shape (skipped without the data).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "mesh/cgal_shim.h"
+#include "test_meshes.h"
+
+#include <math.h>
+#include <stdint.h>
+
+/* Largest distance from mesh `a`'s vertices (in positions pa) to mesh `b`'s surface (in pb). */
+static double one_sided(const pz_mesh *a, const double *pa, const pz_mesh *b, const double *pb)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    double *closest = malloc(3 * (size_t)a->vertex_count * sizeof(double));
+    int32_t *face = malloc((size_t)a->vertex_count * sizeof(int32_t));
+    REQUIRE(closest && face, "out of memory");
+    REQUIRE_OK(pz_cgal_closest_points(pb, b->vertex_count, b->faces, b->face_count, pa, a->vertex_count, closest,
+                                      face, &ctx), ctx);
+    double worst = 0.0;
+    for (int32_t v = 0; v < a->vertex_count; ++v) {
+        double d = 0.0;
+        for (int k = 0; k < 3; ++k)
+            d += (pa[3 * v + k] - closest[3 * v + k]) * (pa[3 * v + k] - closest[3 * v + k]);
+        worst = fmax(worst, sqrt(d));
+    }
+    free(closest);
+    free(face);
+    return worst;
+}
+
+static double distance_both_ways(const pz_mesh *a, const double *pa, const pz_mesh *b, const double *pb)
+{
+    return fmax(one_sided(a, pa, b, pb), one_sided(b, pb, a, pa));
+}
+
+static double diagonal(const pz_mesh *mesh)
+{
+    double lo[3], hi[3];
+    pz_mesh_bbox(mesh, lo, hi);
+    return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+static double well_shaped(const pz_mesh *mesh)
+{
+    double *angles = malloc(3 * (size_t)mesh->face_count * sizeof(double));
+    REQUIRE(angles, "out of memory");
+    pz_geom_corner_angles(mesh, angles);
+    int32_t good = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        good += fmin(angles[3 * f], fmin(angles[3 * f + 1], angles[3 * f + 2])) > 20.0 * TEST_PI / 180.0;
+    free(angles);
+    return (double)good / mesh->face_count;
+}
+
+static int32_t component_count(const pz_mesh *mesh)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    return pz_mesh_face_components(mesh, NULL, &ctx);
+}
+
+static int is_valid(const pz_mesh *mesh)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    pz_validation validation;
+    REQUIRE_OK(pz_mesh_validate(mesh, &validation, &ctx), ctx);
+    int ok = pz_validation_ok(&validation);
+    pz_validation_clear(&validation);
+    return ok;
+}
+
+static pz_mesh *bodice(int32_t faces, int32_t poses, pz_ctx *ctx)
+{
+    pz_generate_options options = {.target_faces = faces, .pose_count = poses};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_generate(PZ_SHAPE_BODICE, &options, &mesh, ctx), *ctx);
+    return mesh;
+}
+
+/* Room for `faces` and `vertices` more (new entries zeroed). */
+static void grow(pz_mesh *mesh, int32_t vertices, int32_t faces)
+{
+    mesh->positions = realloc(mesh->positions, 3 * (size_t)(mesh->vertex_count + vertices) * sizeof(double));
+    mesh->faces = realloc(mesh->faces, 3 * (size_t)(mesh->face_count + faces) * sizeof(int32_t));
+    REQUIRE(mesh->positions && mesh->faces, "out of memory");
+}
+
+static int32_t add_vertex(pz_mesh *mesh, double x, double y, double z)
+{
+    double *p = mesh->positions + 3 * (size_t)mesh->vertex_count;
+    p[0] = x, p[1] = y, p[2] = z;
+    return mesh->vertex_count++;
+}
+
+static void add_face(pz_mesh *mesh, int32_t a, int32_t b, int32_t c)
+{
+    int32_t *f = mesh->faces + 3 * (size_t)mesh->face_count++;
+    f[0] = a, f[1] = b, f[2] = c;
+}
+
+/* A deterministic pseudo-random number in [-1, 1]. */
+static double noise(uint32_t *state)
+{
+    *state = *state * 1664525u + 1013904223u;
+    return (double)(*state >> 8) / (double)(1u << 23) - 1.0;
+}
+
+/* The bodice with every defect the issue lists. */
+static pz_mesh *corrupted_bodice(const pz_mesh *clean, int32_t *duplicates, pz_ctx *ctx)
+{
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_copy(clean, &mesh, ctx), *ctx);
+    int32_t f0 = mesh->face_count, v0 = mesh->vertex_count;
+    grow(mesh, 1000, 2000);
+    uint32_t seed = 12345;
+    for (int32_t i = 0; i < 3 * v0; ++i)
+        mesh->positions[i] += 0.2 * noise(&seed); /* 0.2 mm: scanner noise */
+    *duplicates = 0;
+    for (int32_t f = 0; f < f0; f += 100) /* 1% duplicated, outside the slice of slivers below */
+        if (f < f0 / 2 || f >= f0 / 2 + 300) {
+            add_face(mesh, mesh->faces[3 * f], mesh->faces[3 * f + 1], mesh->faces[3 * f + 2]);
+            ++*duplicates;
+        }
+    for (int i = 0; i < 3; ++i) { /* three non-manifold vertices: a triangle hanging by one corner */
+        int32_t v = mesh->faces[3 * (f0 / 4 * i + 7)];
+        const double *p = mesh->positions + 3 * (size_t)v;
+        int32_t a = add_vertex(mesh, p[0] + 3, p[1] + 40, p[2] + 5), b = add_vertex(mesh, p[0] - 3, p[1] + 40, p[2] + 5);
+        add_face(mesh, v, a, b);
+    }
+    for (int i = 0; i < 20; ++i) { /* 20 tiny fragments: 2 mm triangle pairs floating nearby */
+        double x = 30.0 * i, y = 900.0 + 20 * (i % 3), z = 400.0;
+        int32_t a = add_vertex(mesh, x, y, z), b = add_vertex(mesh, x + 2, y, z), c = add_vertex(mesh, x, y + 2, z),
+                d = add_vertex(mesh, x + 2, y + 2, z);
+        add_face(mesh, a, b, d);
+        add_face(mesh, a, d, c);
+    }
+    for (int32_t f = f0 / 2; f < f0 / 2 + 300; ++f) { /* a slice of slivers: a point just off edge ab */
+        int32_t *corner = mesh->faces + 3 * (size_t)f;
+        int32_t a = corner[0], b = corner[1], c = corner[2];
+        const double *pa = mesh->positions + 3 * (size_t)a, *pb = mesh->positions + 3 * (size_t)b,
+                     *pc = mesh->positions + 3 * (size_t)c;
+        int32_t m = add_vertex(mesh, 0.49 * pa[0] + 0.49 * pb[0] + 0.02 * pc[0],
+                               0.49 * pa[1] + 0.49 * pb[1] + 0.02 * pc[1], 0.49 * pa[2] + 0.49 * pb[2] + 0.02 * pc[2]);
+        corner[2] = m; /* (a b m) is the sliver */
+        add_face(mesh, b, c, m);
+        add_face(mesh, c, a, m);
+    }
+    return mesh;
+}
+
+static void test_corrupted_bodice(void)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    pz_mesh *clean = bodice(20000, 0, &ctx);
+    int32_t duplicates = 0;
+    pz_mesh *mesh = corrupted_bodice(clean, &duplicates, &ctx);
+    CHECK(!is_valid(mesh), "the corrupted bodice should be invalid");
+    pz_prepare_result *result = NULL;
+    REQUIRE_OK(pz_prepare(mesh, NULL, &result, &ctx), ctx);
+    const pz_prepare_report *r = &result->report;
+    const pz_mesh *out = result->mesh;
+    CHECK(is_valid(out), "output is not a valid manifold mesh");
+    CHECK(component_count(out) == 1, "%d components", (int)component_count(out));
+    double shaped = well_shaped(out);
+    CHECK(shaped >= 0.99, "only %.4f of the faces have every angle over 20 degrees", shaped);
+    CHECK(fabs(r->min_angle_over_20_fraction - shaped) < 1e-9, "report says %g, measured %g",
+          r->min_angle_over_20_fraction, shaped);
+    double bound = 0.005 * diagonal(clean), d = distance_both_ways(out, out->positions, clean, clean->positions);
+    CHECK(d < bound, "Hausdorff to the clean bodice %.3f mm, bound %.3f mm", d, bound);
+    CHECK(r->within_bound && r->hausdorff < r->hausdorff_bound, "report: %.3f of %.3f", r->hausdorff,
+          r->hausdorff_bound);
+    CHECK(r->duplicate_faces == duplicates, "%d duplicate faces dropped, %d added", (int)r->duplicate_faces,
+          (int)duplicates);
+    CHECK(r->split_vertices >= 3, "%d vertices split, 3 non-manifold", (int)r->split_vertices);
+    CHECK(r->dropped_components == 23, "%d fragments dropped, 20 + 3 hanging triangles", (int)r->dropped_components);
+    CHECK(abs(out->face_count - 20000) < 2000, "%d faces, about 20000 wanted", (int)out->face_count);
+    pz_prepare_result_free(&result);
+    CHECK(result == NULL, "free does not clear the pointer");
+    pz_mesh_free(&mesh);
+    pz_mesh_free(&clean);
+}
+
+/* The bodice cut into 4 panels by quadrant around the vertical axis, each panel with its own vertices. */
+static pz_mesh *unwelded_bodice(const pz_mesh *clean, double centre[3], double axis[3])
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    double lo[3], hi[3];
+    pz_mesh_bbox(clean, lo, hi);
+    pz_mesh_vertical_axis(clean, axis);
+    for (int k = 0; k < 3; ++k)
+        centre[k] = (lo[k] + hi[k]) / 2;
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_create(3 * clean->face_count, clean->face_count, &mesh, &ctx), ctx);
+    mesh->vertex_count = 0;
+    int32_t *copy = malloc(4 * (size_t)clean->vertex_count * sizeof(int32_t));
+    REQUIRE(copy, "out of memory");
+    for (int32_t i = 0; i < 4 * clean->vertex_count; ++i)
+        copy[i] = -1;
+    int h0 = axis[1] > 0.5 ? 0 : 0, h1 = axis[1] > 0.5 ? 2 : 1; /* horizontal coordinates: x and z, or x and y */
+    for (int32_t f = 0; f < clean->face_count; ++f) {
+        double c[3] = {0, 0, 0};
+        for (int j = 0; j < 3; ++j)
+            for (int k = 0; k < 3; ++k)
+                c[k] += clean->positions[3 * (size_t)clean->faces[3 * f + j] + k] / 3;
+        double angle = atan2(c[h1] - centre[h1], c[h0] - centre[h0]);
+        int panel = (int)floor((angle + TEST_PI) / (TEST_PI / 2)) & 3;
+        for (int j = 0; j < 3; ++j) {
+            int32_t v = clean->faces[3 * f + j], *slot = &copy[4 * v + panel];
+            if (*slot < 0) {
+                *slot = mesh->vertex_count++;
+                memcpy(mesh->positions + 3 * (size_t)*slot, clean->positions + 3 * (size_t)v, 3 * sizeof(double));
+            }
+            mesh->faces[3 * f + j] = *slot;
+        }
+    }
+    free(copy);
+    return mesh;
+}
+
+/* Every seam point lies on a quadrant border (angle a multiple of 90 degrees, within 3 degrees). */
+static void check_seams(const pz_prepare_result *result, const double centre[3], const double axis[3])
+{
+    int h0 = 0, h1 = axis[1] > 0.5 ? 2 : 1;
+    CHECK(result->seam_count == 4, "%d seam curves, 4 expected", (int)result->seam_count);
+    int32_t off_border = 0, points = 0;
+    for (int32_t s = 0; s < result->seam_count; ++s) {
+        double lo = 1e300, hi = -1e300;
+        for (int32_t i = result->seam_offsets[s]; i < result->seam_offsets[s + 1]; ++i, ++points) {
+            const double *p = result->mesh->positions + 3 * (size_t)result->seam_vertices[i];
+            double angle = atan2(p[h1] - centre[h1], p[h0] - centre[h0]) * 180.0 / TEST_PI;
+            double off = fabs(angle / 90.0 - round(angle / 90.0)) * 90.0;
+            off_border += off > 3.0;
+            double height = p[0] * axis[0] + p[1] * axis[1] + p[2] * axis[2];
+            lo = fmin(lo, height), hi = fmax(hi, height);
+        }
+        CHECK(hi - lo > 300.0, "seam %d spans only %.0f mm of the bodice's height", (int)s, hi - lo);
+    }
+    CHECK(off_border == 0, "%d of %d seam points off the panel borders", (int)off_border, (int)points);
+}
+
+static void test_unwelded_panels(void)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    pz_mesh *clean = bodice(20000, 0, &ctx);
+    double centre[3], axis[3];
+    pz_mesh *panels = unwelded_bodice(clean, centre, axis);
+    CHECK(component_count(panels) == 4, "the split bodice has %d components", (int)component_count(panels));
+    for (int remesh = 0; remesh < 2; ++remesh) {
+        pz_prepare_options options = {.no_remesh = !remesh};
+        pz_prepare_result *result = NULL;
+        REQUIRE_OK(pz_prepare(panels, &options, &result, &ctx), ctx);
+        CHECK(result->report.welded_vertices == panels->vertex_count - clean->vertex_count || remesh,
+              "welded %d, expected %d", (int)result->report.welded_vertices,
+              (int)(panels->vertex_count - clean->vertex_count));
+        CHECK(result->report.welded_vertices > 0, "nothing welded");
+        CHECK(component_count(result->mesh) == 1, "remesh %d: %d components", remesh,
+              (int)component_count(result->mesh));
+        CHECK(is_valid(result->mesh), "remesh %d: invalid output", remesh);
+        if (!remesh)
+            CHECK(result->mesh->vertex_count == clean->vertex_count, "%d vertices after welding, %d in the bodice",
+                  (int)result->mesh->vertex_count, (int)clean->vertex_count);
+        check_seams(result, centre, axis);
+        pz_prepare_result_free(&result);
+    }
+    pz_mesh_free(&panels);
+    pz_mesh_free(&clean);
+}
+
+static void test_poses(void)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    pz_mesh *mesh = bodice(30000, 2, &ctx);
+    pz_prepare_options options = {.target_faces = 8000};
+    pz_prepare_result *result = NULL;
+    REQUIRE_OK(pz_prepare(mesh, &options, &result, &ctx), ctx);
+    const pz_mesh *out = result->mesh;
+    CHECK(out->pose_count == 2, "%d poses out of 2", (int)out->pose_count);
+    CHECK(abs(out->face_count - 8000) < 1000, "%d faces, 8000 wanted", (int)out->face_count);
+    double bound = 0.005 * diagonal(mesh);
+    for (int32_t p = 0; p < out->pose_count; ++p) {
+        double d = distance_both_ways(out, out->poses + (size_t)p * out->vertex_count * 3, mesh,
+                                      mesh->poses + (size_t)p * mesh->vertex_count * 3);
+        CHECK(d < bound, "pose %d: %.3f mm from its input, bound %.3f", (int)p + 1, d, bound);
+    }
+    CHECK(result->report.pose_hausdorff_max < result->report.hausdorff_bound, "report: poses %.3f, bound %.3f",
+          result->report.pose_hausdorff_max, result->report.hausdorff_bound);
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+}
+
+static void test_automatic(void)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    pz_mesh *mesh = bodice(5000, 0, &ctx);
+    pz_prepare_result *result = NULL;
+    REQUIRE_OK(pz_prepare_auto(mesh, NULL, &result, &ctx), ctx);
+    CHECK(!result->report.steps[PZ_PREPARE_REMESH].ran, "remeshed a clean small mesh");
+    CHECK(strstr(result->report.steps[PZ_PREPARE_REMESH].detail, "not needed") != NULL, "remesh detail '%s'",
+          result->report.steps[PZ_PREPARE_REMESH].detail);
+    CHECK(result->mesh->face_count == mesh->face_count, "faces changed: %d -> %d", (int)mesh->face_count,
+          (int)result->mesh->face_count);
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+}
+
+static void test_bad_input(void)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    pz_prepare_result *result = (pz_prepare_result *)&ctx; /* must be reset to NULL */
+    /* nothing left: every face degenerate (collinear) */
+    double line[] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0};
+    int32_t faces[] = {0, 1, 2, 1, 2, 3, 0, 1, 3};
+    pz_mesh *mesh = test_mesh_from(4, line, 3, faces, &ctx);
+    CHECK(pz_prepare(mesh, NULL, &result, &ctx) == PZ_ERR_INVALID_MESH, "degenerate mesh accepted");
+    CHECK(result == NULL && strstr(ctx.error, "nothing left") != NULL, "error '%s'", ctx.error);
+    pz_mesh_free(&mesh);
+    /* a target edge longer than the garment */
+    mesh = bodice(2000, 0, &ctx);
+    pz_prepare_options options = {.target_edge = 5000.0};
+    result = (pz_prepare_result *)&ctx;
+    CHECK(pz_prepare(mesh, &options, &result, &ctx) == PZ_ERR_USAGE, "5 m edge accepted");
+    CHECK(result == NULL && strstr(ctx.error, "too long") != NULL, "error '%s'", ctx.error);
+    CHECK(strchr(ctx.error, '\n') == NULL, "error is not one line");
+    pz_mesh_free(&mesh);
+    /* empty */
+    REQUIRE_OK(pz_mesh_create(0, 0, &mesh, &ctx), ctx);
+    result = (pz_prepare_result *)&ctx;
+    CHECK(pz_prepare(mesh, NULL, &result, &ctx) == PZ_ERR_INVALID_MESH, "empty mesh accepted");
+    CHECK(result == NULL, "*out not NULL");
+    pz_mesh_free(&mesh);
+}
+
+static void test_shared_garments(void)
+{
+    const char *dir = test_shared_data();
+    if (!dir) {
+        printf("shared garments: skipped (no ../shared/data)\n");
+        return;
+    }
+    const char *files[] = {"diffavatar-tshirt.obj", "diffavatar-shirt.obj", "parafashion-skirt.obj",
+                           "parafashion-dress.ply", "parafashion-leggings.ply", "parafashion-shirt.obj",
+                           "parafashion-wetsuit.obj", "shirtfront-panel.obj"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
+        pz_ctx ctx;
+        pz_ctx_init(&ctx);
+        ctx.quiet = 1;
+        char path[4096];
+        snprintf(path, sizeof path, "%s/garments/%s", dir, files[i]);
+        pz_mesh *mesh = NULL;
+        REQUIRE_OK(pz_mesh_read(path, &mesh, &ctx), ctx);
+        pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, NULL);
+        pz_prepare_result *result = NULL;
+        pz_status status = pz_prepare(mesh, NULL, &result, &ctx);
+        CHECK(status == PZ_OK, "%s: %s", files[i], ctx.error);
+        if (status == PZ_OK) {
+            double bound = 0.005 * diagonal(mesh);
+            double d = distance_both_ways(result->mesh, result->mesh->positions, mesh, mesh->positions);
+            CHECK(d < bound, "%s: %.3f mm from the input, bound %.3f mm", files[i], d, bound);
+            CHECK(result->report.within_bound, "%s: report says out of bound", files[i]);
+            CHECK(is_valid(result->mesh), "%s: invalid output", files[i]);
+            printf("%-26s %6d -> %6d faces, Hausdorff %.3f mm (bound %.3f), well shaped %.4f\n", files[i],
+                   (int)mesh->face_count, (int)result->mesh->face_count, d, bound,
+                   result->report.min_angle_over_20_fraction);
+        }
+        pz_prepare_result_free(&result);
+        pz_mesh_free(&mesh);
+    }
+}
+
+int main(void)
+{
+    test_corrupted_bodice();
+    test_unwelded_panels();
+    test_poses();
+    test_automatic();
+    test_bad_input();
+    test_shared_garments();
+    return test_finish();
+}

@@ -1,0 +1,411 @@
+/*
+ * tests/param/test_springmass.c -- spring-mass flattening (pz_param_springmass):
+ *  - open cylinder and open cone (developable): E_ang and E_len below 1e-6,
+ *    no flipped face (wang2002 Table 1 example I is a cone);
+ *  - the cone and a trimmed doubly curved patch (a 30-degree cap of the
+ *    hemisphere, a disk of the saddle): E_area and E_shape within 1%
+ *    (wang2002 Table 1), no flipped face, no boundary self-intersection;
+ *  - IISERM: on a ~5K-face hemisphere patch, heap relaxation moves at least
+ *    5x fewer nodes than full relaxation (a deterministic work counter, not a
+ *    clock) and its remaining energy is within 10% of full relaxation's;
+ *    multi-path does more work than single path;
+ *  - orthotropic: changes the pattern, lowers the orthotropic energy (as
+ *    pz_metrics_compute measures it) against the isotropic springs, and the
+ *    warp follows the grain given (x or y) near the seed;
+ *  - energy map: on a flat sheet with one bump the maximum-energy vertex lies
+ *    on the bump; on the hemisphere the cutting line starts on the boundary
+ *    and runs inward (boundary distance rising along it);
+ *  - trial cuts (mccartney2005 Sec. 4): a spherical cap is a dart (sides
+ *    splay apart), the saddle a gusset (sides overlap);
+ *  - energy.svg is written (triangles and the cutting line);
+ *  - two panels (hemisphere halves): both flattened without flips, one
+ *    record each, the energy map sums to E(Phi); a panel of two separate
+ *    triangles is PZ_ERR_DATA with a one-line message and a cleared result.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "param/param.h"
+#include "test_meshes.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static pz_ctx ctx;
+
+/* ------------------------------------------------------------------ helpers */
+
+static pz_mesh *generate(pz_shape shape, int32_t faces, int open)
+{
+    pz_generate_options options = {.target_faces = faces, .open = open};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_generate(shape, &options, &mesh, &ctx), ctx);
+    return mesh;
+}
+
+/* A one-panel pattern of the whole mesh (consumed). */
+static pz_pattern *one_panel(pz_mesh *mesh, const char *name)
+{
+    int32_t *panels = calloc((size_t)mesh->face_count, sizeof(int32_t));
+    REQUIRE(panels, "out of memory");
+    pz_pattern *pattern = NULL;
+    REQUIRE_OK(pz_pattern_build(mesh, panels, NULL, NULL, name, &pattern, &ctx), ctx);
+    free(panels);
+    pz_mesh_free(&mesh);
+    return pattern;
+}
+
+/* The faces of `mesh` whose centroid passes keep(); the source is freed. */
+static pz_mesh *trim(pz_mesh *mesh, int (*keep)(const double centroid[3]))
+{
+    int32_t *ids = malloc((size_t)mesh->face_count * sizeof(int32_t)), count = 0;
+    REQUIRE(ids, "out of memory");
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double c[3] = {0, 0, 0};
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 3; ++d)
+                c[d] += mesh->positions[3 * mesh->faces[3 * f + k] + d] / 3;
+        if (keep(c))
+            ids[count++] = f;
+    }
+    pz_mesh *out = NULL;
+    REQUIRE_OK(pz_mesh_extract(mesh, ids, count, &out, NULL, NULL, &ctx), ctx);
+    free(ids);
+    pz_mesh_free(&mesh);
+    return out;
+}
+
+static int cap30(const double c[3]) { return c[2] > 150 * cos(30 * TEST_PI / 180); }
+static int cap60(const double c[3]) { return c[2] > 150 * cos(60 * TEST_PI / 180); }
+static int saddle_disk(const double c[3]) { return c[0] * c[0] + c[1] * c[1] < 80 * 80; }
+static int saddle_wide(const double c[3]) { return c[0] * c[0] + c[1] * c[1] < 150 * 150; }
+
+static double *flatten(const pz_pattern *pattern, const pz_springmass_options *options, pz_springmass_result *result)
+{
+    double *uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+    REQUIRE(uv, "out of memory");
+    REQUIRE_OK(pz_param_springmass(pattern, options, uv, result, &ctx), ctx);
+    return uv;
+}
+
+static pz_metrics *measure(const pz_pattern *pattern, const double *uv)
+{
+    pz_metrics *metrics = NULL;
+    REQUIRE_OK(pz_metrics_compute(pattern, uv, 0, NULL, &metrics, &ctx), ctx);
+    return metrics;
+}
+
+/* ------------------------------------------------------------------ tests */
+
+static void test_developable(pz_shape shape)
+{
+    pz_pattern *pattern = one_panel(generate(shape, 2000, 1), pz_shape_name(shape));
+    pz_springmass_result result;
+    double *uv = flatten(pattern, NULL, &result);
+    pz_metrics *m = measure(pattern, uv);
+    const pz_panel_metrics *pm = &m->panels[0];
+    printf("%s: E_len %.3g E_ang %.3g E_area %.3g E_shape %.3g, stop %d after %d sweeps\n", pz_shape_name(shape),
+           pm->e_len, pm->e_ang, pm->e_area, pm->e_shape, result.panels[0].stop, result.panels[0].iterations);
+    CHECK(pm->e_len < 1e-6, "%s: E_len %g", pz_shape_name(shape), pm->e_len);
+    CHECK(pm->e_ang < 1e-6, "%s: E_ang %g", pz_shape_name(shape), pm->e_ang);
+    CHECK(pm->e_area < 0.01 && pm->e_shape < 0.01, "%s: E_area %g E_shape %g", pz_shape_name(shape), pm->e_area,
+          pm->e_shape);
+    CHECK(m->injective, "%s: %d flipped, %d crossings", pz_shape_name(shape), pm->flipped_triangles,
+          pm->boundary_self_intersections);
+    pz_metrics_free(&m);
+    pz_springmass_result_clear(&result);
+    free(uv);
+    pz_pattern_free(&pattern);
+}
+
+static void test_doubly_curved(const char *name, pz_mesh *mesh)
+{
+    pz_pattern *pattern = one_panel(mesh, name);
+    pz_springmass_result result;
+    double *uv = flatten(pattern, NULL, &result);
+    pz_metrics *m = measure(pattern, uv);
+    const pz_panel_metrics *pm = &m->panels[0];
+    printf("%s (%d faces): E_area %.4f%% E_shape %.4f%% (result %.4f%% %.4f%%), stop %d after %d sweeps\n", name,
+           (int)pattern->mesh->face_count, 100 * pm->e_area, 100 * pm->e_shape, 100 * result.panels[0].e_area,
+           100 * result.panels[0].e_shape, result.panels[0].stop, result.panels[0].iterations);
+    CHECK(pm->e_area <= 0.01, "%s: E_area %g", name, pm->e_area);
+    CHECK(pm->e_shape <= 0.01, "%s: E_shape %g", name, pm->e_shape);
+    CHECK(fabs(pm->e_area - result.panels[0].e_area) < 1e-9, "%s: Eq. 4 disagrees with metrics", name);
+    CHECK(m->injective, "%s: %d flipped, %d crossings", name, pm->flipped_triangles, pm->boundary_self_intersections);
+    pz_metrics_free(&m);
+    pz_springmass_result_clear(&result);
+    free(uv);
+    pz_pattern_free(&pattern);
+}
+
+static void test_heap_versus_full(void)
+{
+    pz_pattern *pattern = one_panel(trim(generate(PZ_SHAPE_HEMISPHERE, 9000, 0), cap60), "hemisphere cap");
+    pz_springmass_options heap = {0}, full = {.relax = 1}, multi = {.heap_paths = 8};
+    pz_springmass_result rh, rf, rm;
+    double *uv_heap = flatten(pattern, &heap, &rh);
+    double *uv_full = flatten(pattern, &full, &rf);
+    double *uv_multi = flatten(pattern, &multi, &rm);
+    printf("heap vs full (%d faces): relaxations %lld / %lld / multi %lld (phase one %lld / %lld / %lld), "
+           "energy %.6g / %.6g / %.6g, time %.0f / %.0f / %.0f ms\n",
+           (int)pattern->mesh->face_count, rh.node_relaxations, rf.node_relaxations, rm.node_relaxations,
+           rh.phase_one_relaxations, rf.phase_one_relaxations, rm.phase_one_relaxations, rh.final_energy,
+           rf.final_energy, rm.final_energy, rh.phase_one_ms + rh.phase_two_ms, rf.phase_one_ms + rf.phase_two_ms,
+           rm.phase_one_ms + rm.phase_two_ms);
+    CHECK(pattern->mesh->face_count > 4000, "patch has %d faces", (int)pattern->mesh->face_count);
+    CHECK(5 * rh.node_relaxations <= rf.node_relaxations, "heap %lld vs full %lld relaxations", rh.node_relaxations,
+          rf.node_relaxations);
+    CHECK(fabs(rh.final_energy - rf.final_energy) <= 0.1 * rf.final_energy, "remaining energy heap %g full %g",
+          rh.final_energy, rf.final_energy);
+    CHECK(rm.phase_one_relaxations > rh.phase_one_relaxations, "multi-path %lld vs single %lld",
+          rm.phase_one_relaxations, rh.phase_one_relaxations);
+    pz_metrics *m = measure(pattern, uv_heap);
+    CHECK(m->injective, "heap: %d flipped", m->panels[0].flipped_triangles);
+    pz_metrics_free(&m);
+    pz_springmass_result_clear(&rh);
+    pz_springmass_result_clear(&rf);
+    pz_springmass_result_clear(&rm);
+    free(uv_heap);
+    free(uv_full);
+    free(uv_multi);
+    pz_pattern_free(&pattern);
+}
+
+/* Area-weighted mean angle (degrees) between the warp's 3D image and the grain projected on each face. */
+static double warp_grain_angle(const pz_mesh *mesh, const double *uv, const double grain[3])
+{
+    double sum = 0, weights = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const int32_t *c = mesh->faces + 3 * f;
+        double p3[3][3], p2[3][2];
+        for (int k = 0; k < 3; ++k) {
+            memcpy(p3[k], mesh->positions + 3 * c[k], sizeof p3[k]);
+            memcpy(p2[k], uv + 2 * c[k], sizeof p2[k]);
+        }
+        double e1u = p2[1][0] - p2[0][0], e1v = p2[1][1] - p2[0][1], e2u = p2[2][0] - p2[0][0],
+               e2v = p2[2][1] - p2[0][1], det = e1u * e2v - e2u * e1v, jv[3], n[3];
+        double E1[3], E2[3];
+        for (int d = 0; d < 3; ++d) {
+            E1[d] = p3[1][d] - p3[0][d];
+            E2[d] = p3[2][d] - p3[0][d];
+            jv[d] = (E2[d] * e1u - E1[d] * e2u) / det;
+        }
+        n[0] = E1[1] * E2[2] - E1[2] * E2[1];
+        n[1] = E1[2] * E2[0] - E1[0] * E2[2];
+        n[2] = E1[0] * E2[1] - E1[1] * E2[0];
+        double area = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        double gn = (grain[0] * n[0] + grain[1] * n[1] + grain[2] * n[2]) / (area * area);
+        double g[3] = {grain[0] - gn * n[0], grain[1] - gn * n[1], grain[2] - gn * n[2]};
+        double lg = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]), lj = sqrt(jv[0] * jv[0] + jv[1] * jv[1] + jv[2] * jv[2]);
+        double cosine = (g[0] * jv[0] + g[1] * jv[1] + g[2] * jv[2]) / (lg * lj);
+        sum += area * acos(cosine > 1 ? 1 : cosine < -1 ? -1 : cosine) * 180 / TEST_PI;
+        weights += area;
+    }
+    return sum / weights;
+}
+
+static void test_orthotropic(void)
+{
+    pz_pattern *pattern = one_panel(trim(generate(PZ_SHAPE_SADDLE, 4000, 0), saddle_disk), "saddle disk");
+    int32_t nv = pattern->mesh->vertex_count;
+    /* no accuracy stop: both run until the energy settles, so each reaches its own minimum */
+    pz_springmass_options iso = {.grain_given = 1, .grain = {1, 0, 0}, .accuracy = 1e-9};
+    pz_springmass_options ortho = iso, ortho_y = {.orthotropic = 1, .grain_given = 1, .grain = {0, 1, 0}, .accuracy = 1e-9};
+    ortho.orthotropic = 1;
+    double *uv_iso = flatten(pattern, &iso, NULL), *uv_ortho = flatten(pattern, &ortho, NULL);
+    double *uv_y = flatten(pattern, &ortho_y, NULL);
+    double moved = 0;
+    for (int32_t i = 0; i < 2 * nv; ++i)
+        moved = fmax(moved, fabs(uv_iso[i] - uv_ortho[i]));
+    pz_metrics *mi = measure(pattern, uv_iso), *mo = measure(pattern, uv_ortho);
+    double angle_x = warp_grain_angle(pattern->mesh, uv_ortho, ortho.grain);
+    double angle_y = warp_grain_angle(pattern->mesh, uv_y, ortho_y.grain);
+    double angle_x_on_y = warp_grain_angle(pattern->mesh, uv_y, ortho.grain);
+    printf("orthotropic saddle: max uv change %.3g mm, orthotropic energy %.6g (isotropic springs %.6g), warp-grain "
+           "angle %.2f (x) %.2f (y) deg, y pattern against x %.2f deg\n",
+           moved, mo->panels[0].orthotropic_energy, mi->panels[0].orthotropic_energy, angle_x, angle_y, angle_x_on_y);
+    CHECK(moved > 1e-3, "orthotropic left the pattern unchanged (%g mm)", moved);
+    CHECK(mo->panels[0].orthotropic_energy < mi->panels[0].orthotropic_energy, "orthotropic energy %g >= %g",
+          mo->panels[0].orthotropic_energy, mi->panels[0].orthotropic_energy);
+    CHECK(angle_x < 5 && angle_y < 5, "warp off the grain: %g, %g degrees", angle_x, angle_y);
+    CHECK(angle_x_on_y > 60, "the y-grain pattern's warp should be across x: %g degrees", angle_x_on_y);
+    CHECK(mo->injective, "orthotropic: %d flipped", mo->panels[0].flipped_triangles);
+    pz_metrics_free(&mi);
+    pz_metrics_free(&mo);
+    free(uv_iso);
+    free(uv_ortho);
+    free(uv_y);
+    pz_pattern_free(&pattern);
+}
+
+/* A flat 300 x 300 mm sheet with a Gaussian bump centred at (210, 90). */
+static void test_energy_map_bump(void)
+{
+    pz_mesh *mesh = test_grid(50, 50, TEST_GRID_FLAT, 0, &ctx);
+    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+        double *p = mesh->positions + 3 * v;
+        p[0] *= 6;
+        p[1] *= 6;
+        double r2 = (p[0] - 210) * (p[0] - 210) + (p[1] - 90) * (p[1] - 90);
+        p[2] = 25 * exp(-r2 / (2 * 25.0 * 25.0));
+    }
+    pz_pattern *pattern = one_panel(mesh, "bump");
+    pz_springmass_result result;
+    double *uv = flatten(pattern, NULL, &result);
+    const double *top = pattern->mesh->positions + 3 * result.panels[0].max_energy_vertex;
+    double distance = hypot(top[0] - 210, top[1] - 90);
+    printf("bump: max energy %.4g at (%.0f, %.0f), %.1f mm from the bump centre\n",
+           result.vertex_energy[result.panels[0].max_energy_vertex], top[0], top[1], distance);
+    CHECK(distance < 60, "max-energy vertex %g mm from the bump", distance);
+    pz_springmass_result_clear(&result);
+    free(uv);
+    pz_pattern_free(&pattern);
+}
+
+static double boundary_distance_along(const pz_pattern *pattern, const pz_springmass_panel *panel, int32_t i)
+{
+    /* distance to the cap's rim z = 0 on the hemisphere: its height */
+    return pattern->mesh->positions[3 * panel->cut_vertices[i] + 2];
+}
+
+static void test_cutting_line_and_dart(void)
+{
+    pz_pattern *pattern = one_panel(generate(PZ_SHAPE_HEMISPHERE, 3000, 0), "hemisphere");
+    pz_springmass_options options = {.trial_cut = 1};
+    pz_springmass_result result;
+    double *uv = flatten(pattern, &options, &result);
+    const pz_springmass_panel *panel = &result.panels[0];
+    REQUIRE(panel->cut_vertex_count >= 2, "cutting line of %d vertices", (int)panel->cut_vertex_count);
+    double rim = boundary_distance_along(pattern, panel, 0);
+    /* the line steps to larger graph distance from the rim; the height (the
+     * true distance's proxy) may dip by less than an edge on the way */
+    int rising = 1;
+    for (int32_t i = 1; i < panel->cut_vertex_count; ++i)
+        rising &= boundary_distance_along(pattern, panel, i) > boundary_distance_along(pattern, panel, i - 1) - 5;
+    rising &= boundary_distance_along(pattern, panel, panel->cut_vertex_count - 1) > 30;
+    printf("hemisphere: cutting line of %d vertices from z %.1f to z %.1f; trial cut: kind %d, opening %.1f mm^2, "
+           "energy %.4g -> %.4g\n",
+           (int)panel->cut_vertex_count, rim, boundary_distance_along(pattern, panel, panel->cut_vertex_count - 1),
+           panel->cut_kind, panel->cut_opening_mm2, panel->final_energy, panel->cut_energy);
+    CHECK(rim < 1e-6, "cutting line starts at z %g, not on the rim", rim);
+    CHECK(rising, "cutting line does not run inward");
+    CHECK(panel->cut_kind == PZ_SEAM_KIND_DART, "hemisphere cut classified %d, want dart", panel->cut_kind);
+    CHECK(panel->cut_energy < panel->final_energy, "the cut did not release energy: %g -> %g", panel->final_energy,
+          panel->cut_energy);
+
+    char dir[] = "/tmp/pz_springmass_XXXXXX", path[256];
+    REQUIRE(mkdtemp(dir), "mkdtemp");
+    snprintf(path, sizeof path, "%s/energy.svg", dir);
+    REQUIRE_OK(pz_springmass_write_energy_svg(pattern, uv, &result, path, &ctx), ctx);
+    FILE *file = fopen(path, "r");
+    REQUIRE(file, "energy.svg missing");
+    char line[512];
+    int polygons = 0, polylines = 0;
+    while (fgets(line, sizeof line, file)) {
+        polygons += strncmp(line, "<polygon", 8) == 0;
+        polylines += strncmp(line, "<polyline", 9) == 0;
+    }
+    fclose(file);
+    CHECK(polygons == pattern->mesh->face_count && polylines == 1, "energy.svg: %d polygons, %d polylines", polygons,
+          polylines);
+    remove(path);
+    rmdir(dir);
+    pz_springmass_result_clear(&result);
+    free(uv);
+    pz_pattern_free(&pattern);
+}
+
+static void test_gusset(void)
+{
+    pz_pattern *pattern = one_panel(trim(generate(PZ_SHAPE_SADDLE, 3000, 0), saddle_wide), "saddle");
+    pz_springmass_options options = {.trial_cut = 1};
+    pz_springmass_result result;
+    double *uv = flatten(pattern, &options, &result);
+    const pz_springmass_panel *panel = &result.panels[0];
+    printf("saddle: cutting line of %d vertices; trial cut: kind %d, opening %.1f mm^2\n",
+           (int)panel->cut_vertex_count, panel->cut_kind, panel->cut_opening_mm2);
+    CHECK(panel->cut_kind == PZ_SEAM_KIND_GUSSET, "saddle cut classified %d, want gusset", panel->cut_kind);
+    pz_springmass_result_clear(&result);
+    free(uv);
+    pz_pattern_free(&pattern);
+}
+
+/* Two halves of the hemisphere as two panels: both flattened, each with its own record. */
+static void test_two_panels(void)
+{
+    pz_mesh *mesh = generate(PZ_SHAPE_HEMISPHERE, 2000, 0);
+    int32_t *panels = malloc((size_t)mesh->face_count * sizeof(int32_t));
+    REQUIRE(panels, "out of memory");
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double x = 0;
+        for (int k = 0; k < 3; ++k)
+            x += mesh->positions[3 * mesh->faces[3 * f + k]];
+        panels[f] = x > 0;
+    }
+    pz_pattern *pattern = NULL;
+    REQUIRE_OK(pz_pattern_build(mesh, panels, NULL, NULL, "halves", &pattern, &ctx), ctx);
+    pz_springmass_result result;
+    double *uv = flatten(pattern, NULL, &result);
+    int finite = 1;
+    for (int32_t i = 0; i < 2 * pattern->mesh->vertex_count; ++i)
+        finite &= isfinite(uv[i]);
+    pz_metrics *m = measure(pattern, uv);
+    CHECK(finite, "non-finite pattern coordinates");
+    CHECK(result.panel_count == 2 && result.panels[0].panel == 0 && result.panels[1].panel == 1, "panel records");
+    for (int p = 0; p < 2 && result.panel_count == 2; ++p) {
+        CHECK(result.panels[p].cut_vertex_count >= 2, "panel %d: no cutting line", p);
+        CHECK(m->panels[p].flipped_triangles == 0, "panel %d: %d flipped", p, m->panels[p].flipped_triangles);
+        CHECK(fabs(result.panels[p].e_area - m->panels[p].e_area) < 1e-9, "panel %d: Eq. 4 disagrees", p);
+    }
+    double sum = 0;
+    for (int32_t v = 0; v < result.vertex_count; ++v)
+        sum += result.vertex_energy[v];
+    CHECK(fabs(sum - result.final_energy) <= 1e-9 * result.final_energy, "energy map sums to %g, not %g", sum,
+          result.final_energy);
+    pz_metrics_free(&m);
+    pz_springmass_result_clear(&result);
+    free(uv);
+    free(panels);
+    pz_pattern_free(&pattern);
+    pz_mesh_free(&mesh);
+}
+
+/* A panel of two separate triangles cannot be reached from one seed: PZ_ERR_DATA, nothing leaked. */
+static void test_disconnected_panel(void)
+{
+    static const double positions[] = {0, 0, 0, 10, 0, 0, 0, 10, 0, 50, 0, 0, 60, 0, 0, 50, 10, 0};
+    static const int32_t faces[] = {0, 1, 2, 3, 4, 5};
+    pz_pattern pattern = {0};
+    int32_t face_panel[2] = {0, 0}, origin[6] = {0, 1, 2, 3, 4, 5};
+    pattern.mesh = test_mesh_from(6, positions, 2, faces, &ctx);
+    pattern.panel_count = 1;
+    pattern.face_panel = face_panel;
+    pattern.vertex_origin = origin;
+    double uv[12];
+    pz_springmass_result result;
+    pz_status status = pz_param_springmass(&pattern, NULL, uv, &result, &ctx);
+    CHECK(status == PZ_ERR_DATA, "status %d", (int)status);
+    CHECK(strstr(ctx.error, "springmass") && !strchr(ctx.error, '\n'), "message: %s", ctx.error);
+    CHECK(result.vertex_energy == NULL && result.panels == NULL, "result not cleared");
+    pz_mesh_free(&pattern.mesh);
+}
+
+int main(void)
+{
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    test_developable(PZ_SHAPE_CYLINDER);
+    test_developable(PZ_SHAPE_CONE);
+    test_doubly_curved("hemisphere 30-degree cap", trim(generate(PZ_SHAPE_HEMISPHERE, 8000, 0), cap30));
+    test_doubly_curved("saddle disk", trim(generate(PZ_SHAPE_SADDLE, 4000, 0), saddle_disk));
+    test_heap_versus_full();
+    test_orthotropic();
+    test_energy_map_bump();
+    test_cutting_line_and_dart();
+    test_gusset();
+    test_two_panels();
+    test_disconnected_panel();
+    return test_finish();
+}
