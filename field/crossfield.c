@@ -59,6 +59,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
+#include "field/internal.h"
 #include "mesh/internal.h"
 
 #include <cholmod.h>
@@ -68,28 +69,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define FIELD_PI 3.14159265358979323846
 
-/* ---------------------------------------------------------------- vectors */
-
-static void sub3(const double *a, const double *b, double *out)
-{
-    out[0] = a[0] - b[0], out[1] = a[1] - b[1], out[2] = a[2] - b[2];
-}
-static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void cross3(const double *a, const double *b, double *out)
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-static double normalize3(double *v)
-{
-    double length = sqrt(dot3(v, v));
-    if (length > 0.0)
-        v[0] /= length, v[1] /= length, v[2] /= length;
-    return length;
-}
 
 double pz_field_cross_angle_deg(const double arm[3], const double direction[3], const double normal[3])
 {

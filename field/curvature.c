@@ -39,34 +39,14 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
+#include "field/internal.h"
 
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
-#define FIELD_PI 3.14159265358979323846
 
-/* ---------------------------------------------------------------- small vector helpers */
-
-static void sub3(const double *a, const double *b, double *out)
-{
-    out[0] = a[0] - b[0], out[1] = a[1] - b[1], out[2] = a[2] - b[2];
-}
-static double dot3(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-static void cross3(const double *a, const double *b, double *out)
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-static double normalize3(double *v)
-{
-    double length = sqrt(dot3(v, v));
-    if (length > 0.0)
-        v[0] /= length, v[1] /= length, v[2] /= length;
-    return length;
-}
 
 /* Any unit vector orthogonal to the unit vector n. */
 static void orthogonal3(const double *n, double *out)

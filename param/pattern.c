@@ -54,6 +54,25 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Frees an array of seams (or darts) and their vertex lists; NULL is fine. */
+static void free_seams(pz_seam *seams, int32_t count)
+{
+    for (int32_t i = 0; seams && i < count; ++i) {
+        free(seams[i].side_a);
+        free(seams[i].side_b);
+    }
+    free(seams);
+}
+
+static void free_darts(pz_dart *darts, int32_t count)
+{
+    for (int32_t i = 0; darts && i < count; ++i) {
+        free(darts[i].leg_a);
+        free(darts[i].leg_b);
+    }
+    free(darts);
+}
+
 void pz_pattern_free(pz_pattern **pattern)
 {
     if (!pattern || !*pattern)
@@ -62,16 +81,8 @@ void pz_pattern_free(pz_pattern **pattern)
     pz_mesh_free(&p->mesh);
     free(p->vertex_origin);
     free(p->face_panel);
-    for (int32_t i = 0; i < p->seam_count; ++i) {
-        free(p->seams[i].side_a);
-        free(p->seams[i].side_b);
-    }
-    free(p->seams);
-    for (int32_t i = 0; i < p->dart_count; ++i) {
-        free(p->darts[i].leg_a);
-        free(p->darts[i].leg_b);
-    }
-    free(p->darts);
+    free_seams(p->seams, p->seam_count);
+    free_darts(p->darts, p->dart_count);
     free(p);
     *pattern = NULL;
 }
@@ -1045,16 +1056,8 @@ static void builder_free(builder *b)
     free(b->vertex_panel);
     free(b->copy_offsets);
     free(b->copies);
-    for (int32_t i = 0; i < b->seam_count; ++i) {
-        free(b->seams[i].side_a);
-        free(b->seams[i].side_b);
-    }
-    free(b->seams);
-    for (int32_t i = 0; i < b->dart_count; ++i) {
-        free(b->darts[i].leg_a);
-        free(b->darts[i].leg_b);
-    }
-    free(b->darts);
+    free_seams(b->seams, b->seam_count);
+    free_darts(b->darts, b->dart_count);
 }
 
 /* Moves the results out of the builder into a pattern. */
