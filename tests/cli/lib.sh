@@ -104,6 +104,14 @@ PY
 
 # json_true EXPR [FILE]: evaluates a Python expression over a JSON file (bound
 # to d; json imported), by default the last run's stdout. For check.
+# report_checks WHAT DIR DESCRIPTION EXPR...: json_checks over DIR/report.json.
+report_checks() {
+    local what=$1 dir=$2
+    shift 2
+    cp "$dir/report.json" "$WORK/out"
+    json_checks "$what" "$@"
+}
+
 json_true() {
     python3 -c 'import json,sys; d=json.load(open(sys.argv[1])); sys.exit(0 if eval(sys.argv[2]) else 1)' \
         "${2:-$WORK/out}" "$1" 2>/dev/null

@@ -19,14 +19,6 @@ source "$(dirname "$0")/lib.sh"
 
 DATA=${PZ_SHARED_DATA:-}
 
-# report_checks WHAT DIR DESCRIPTION EXPR...: json_checks over DIR/report.json.
-report_checks() {
-    local what=$1 dir=$2
-    shift 2
-    cp "$dir/report.json" "$WORK/out"
-    json_checks "$what" "$@"
-}
-
 # The metrics every back-end reports, per panel.
 metric_keys='["E_len","E_ang","E_area","E_shape","strain_warp","strain_weft","shear_deg","flipped_triangles"]'
 

@@ -15,14 +15,6 @@ source "$(dirname "$0")/lib.sh"
 
 DATA=${PZ_SHARED_DATA:-}
 
-# report_checks WHAT DIR DESCRIPTION EXPR...: json_checks over DIR/report.json.
-report_checks() {
-    local what=$1 dir=$2
-    shift 2
-    cp "$dir/report.json" "$WORK/out"
-    json_checks "$what" "$@"
-}
-
 keys='["input","parameters","timings_ms","panels","seams","darts","summary"]'
 panel_keys='["id","faces","area_3d_mm2","area_2d_mm2","strain_warp","strain_weft","shear_deg",
 "orthotropic_energy","arap_energy","E_len","E_ang","E_area","E_shape","flipped_triangles",
