@@ -22,44 +22,57 @@
 
 #include <cjson/cJSON.h>
 
-/** Options a command may accept (a bit set per command). */
-enum pz_cli_option {
-    PZ_CLI_OPT_QUIET = 1u << 0,   /* --quiet */
-    PZ_CLI_OPT_JSON = 1u << 1,    /* --json */
-    PZ_CLI_OPT_UNITS = 1u << 2,   /* --units mm|cm|m|auto */
-    PZ_CLI_OPT_REPAIR = 1u << 3,  /* --repair */
-    PZ_CLI_OPT_POSE = 1u << 4,    /* --pose FILE (repeatable) */
-    PZ_CLI_OPT_OUTPUT = 1u << 5,  /* -o FILE / --output FILE */
-    PZ_CLI_OPT_FACES = 1u << 6,   /* --faces N */
-    PZ_CLI_OPT_POSES = 1u << 7,   /* --poses K */
-    PZ_CLI_OPT_OPEN = 1u << 8,    /* --open */
-    /* Options whose raw text is kept for the command to parse (values[]): */
-    PZ_CLI_OPT_PANELS = 1u << 9,      /* --panels FILE|uv */
-    PZ_CLI_OPT_SEAMS = 1u << 10,      /* --seams FILE (repeatable) */
-    PZ_CLI_OPT_DARTS = 1u << 11,      /* --darts FILE (repeatable) */
-    PZ_CLI_OPT_GRAIN = 1u << 12,      /* --grain X,Y,Z */
-    PZ_CLI_OPT_BACKEND = 1u << 13,    /* --backend NAME */
-    PZ_CLI_OPT_ITERATIONS = 1u << 14, /* --iterations N */
-    PZ_CLI_OPT_WEIGHTS = 1u << 15,    /* --weights S,R,D,M */
-    PZ_CLI_OPT_FABRIC = 1u << 16,     /* --fabric KSU,KSV,KR */
-    PZ_CLI_OPT_SKETCH = 1u << 17,     /* --sketch FILE */
-    PZ_CLI_OPT_SCALES = 1u << 18,     /* --scales K */
-    PZ_CLI_OPT_SMOOTHNESS = 1u << 19, /* --smoothness W */
-    PZ_CLI_OPT_EDGE = 1u << 20,       /* --edge MM (prepare) */
-    PZ_CLI_OPT_WELD = 1u << 21,       /* --weld MM (prepare) */
-    PZ_CLI_OPT_KEEP = 1u << 22,       /* --keep largest|all (prepare) */
-    PZ_CLI_OPT_SCHEME = 1u << 23,     /* --scheme global|progressive (flatten, wirewarp) */
-    PZ_CLI_OPT_RELAX = 1u << 24,      /* --relax heap|full (flatten, springmass) */
-    PZ_CLI_OPT_FEATURES = 1u << 25    /* --features FILE (flatten, wirewarp) */
-};
+/*
+ * Options a command may accept (a 64-bit set per command). Bits 0..8 are
+ * flags or options parsed by main.c; from PZ_CLI_VALUE_FIRST_BIT on, the raw
+ * text is kept for the command to parse (pz_cli_value).
+ */
+#define PZ_CLI_OPT_QUIET (UINT64_C(1) << 0) /* --quiet */
+#define PZ_CLI_OPT_JSON (UINT64_C(1) << 1) /* --json */
+#define PZ_CLI_OPT_UNITS (UINT64_C(1) << 2) /* --units mm|cm|m|auto */
+#define PZ_CLI_OPT_REPAIR (UINT64_C(1) << 3) /* --repair */
+#define PZ_CLI_OPT_POSE (UINT64_C(1) << 4) /* --pose FILE (repeatable) */
+#define PZ_CLI_OPT_OUTPUT (UINT64_C(1) << 5) /* -o FILE / --output FILE */
+#define PZ_CLI_OPT_FACES (UINT64_C(1) << 6) /* --faces N */
+#define PZ_CLI_OPT_POSES (UINT64_C(1) << 7) /* --poses K */
+#define PZ_CLI_OPT_OPEN (UINT64_C(1) << 8) /* --open */
+#define PZ_CLI_OPT_PANELS (UINT64_C(1) << 9) /* --panels FILE|uv */
+#define PZ_CLI_OPT_SEAMS (UINT64_C(1) << 10) /* --seams FILE (repeatable) */
+#define PZ_CLI_OPT_DARTS (UINT64_C(1) << 11) /* --darts FILE (repeatable) */
+#define PZ_CLI_OPT_GRAIN (UINT64_C(1) << 12) /* --grain X,Y,Z */
+#define PZ_CLI_OPT_BACKEND (UINT64_C(1) << 13) /* --backend NAME */
+#define PZ_CLI_OPT_ITERATIONS (UINT64_C(1) << 14) /* --iterations N */
+#define PZ_CLI_OPT_WEIGHTS (UINT64_C(1) << 15) /* --weights S,R,D,M */
+#define PZ_CLI_OPT_FABRIC (UINT64_C(1) << 16) /* --fabric KSU,KSV,KR */
+#define PZ_CLI_OPT_SKETCH (UINT64_C(1) << 17) /* --sketch FILE */
+#define PZ_CLI_OPT_SCALES (UINT64_C(1) << 18) /* --scales K */
+#define PZ_CLI_OPT_SMOOTHNESS (UINT64_C(1) << 19) /* --smoothness W */
+#define PZ_CLI_OPT_EDGE (UINT64_C(1) << 20) /* --edge MM (prepare) */
+#define PZ_CLI_OPT_WELD (UINT64_C(1) << 21) /* --weld MM (prepare) */
+#define PZ_CLI_OPT_KEEP (UINT64_C(1) << 22) /* --keep largest|all (prepare) */
+#define PZ_CLI_OPT_SCHEME (UINT64_C(1) << 23) /* --scheme global|progressive (flatten, wirewarp) */
+#define PZ_CLI_OPT_RELAX (UINT64_C(1) << 24) /* --relax heap|full (flatten, springmass) */
+#define PZ_CLI_OPT_FEATURES (UINT64_C(1) << 25) /* --features FILE (flatten, wirewarp) */
+#define PZ_CLI_OPT_MAX_CORNERS (UINT64_C(1) << 26) /* --max-corners C (run) */
+#define PZ_CLI_OPT_MAX_STRAIN (UINT64_C(1) << 27) /* --max-strain S (run) */
+#define PZ_CLI_OPT_SYMMETRY (UINT64_C(1) << 28) /* --symmetry auto|off|x|y|z (run) */
+#define PZ_CLI_OPT_PREPARE (UINT64_C(1) << 29) /* --prepare auto|off (run) */
+#define PZ_CLI_OPT_SEAM_ALLOWANCE (UINT64_C(1) << 30) /* --seam-allowance MM (flatten, run) */
+#define PZ_CLI_OPT_HEM_ALLOWANCE (UINT64_C(1) << 31) /* --hem-allowance MM */
+#define PZ_CLI_OPT_ALLOWANCES (UINT64_C(1) << 32) /* --allowances FILE: per-seam allowance overrides */
+#define PZ_CLI_OPT_NOTCH_SPACING (UINT64_C(1) << 33) /* --notch-spacing MM */
+#define PZ_CLI_OPT_PAPER (UINT64_C(1) << 34) /* --paper a4|letter */
+#define PZ_CLI_OPT_FABRIC_WIDTH (UINT64_C(1) << 35) /* --fabric-width MM */
+#define PZ_CLI_OPT_GAP (UINT64_C(1) << 36) /* --gap MM */
+#define PZ_CLI_OPT_DXF_STRICT (UINT64_C(1) << 37) /* --dxf-strict (a flag: stored as the value "1") */
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 17
-static inline int pz_cli_value_index(unsigned flag)
+#define PZ_CLI_VALUE_COUNT 29
+static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;
-    while (!(flag & (1u << bit)))
+    while (!(flag & (UINT64_C(1) << bit)))
         ++bit;
     return bit - PZ_CLI_VALUE_FIRST_BIT;
 }
@@ -91,7 +104,7 @@ typedef struct pz_cli_args {
 } pz_cli_args;
 
 /** The raw text of a value option (PZ_CLI_OPT_PANELS ... PZ_CLI_OPT_SMOOTHNESS), or NULL when absent. */
-static inline const char *pz_cli_value(const pz_cli_args *args, unsigned flag)
+static inline const char *pz_cli_value(const pz_cli_args *args, uint64_t flag)
 {
     return args->values[pz_cli_value_index(flag)];
 }
@@ -101,7 +114,7 @@ typedef struct pz_cli_command {
     const char *name;
     const char *summary;        /* one line for `panelize --help` */
     const char *usage;          /* full text for `panelize COMMAND --help` */
-    unsigned options;           /* accepted pz_cli_option bits */
+    uint64_t options;           /* accepted PZ_CLI_OPT_* bits */
     pz_status (*run)(const pz_cli_args *args, pz_ctx *ctx);
 } pz_cli_command;
 

@@ -60,7 +60,7 @@ static const size_t command_table_count = sizeof command_table / sizeof command_
 typedef struct option_spec {
     const char *long_name;  /* without the leading "--" */
     char short_name;        /* 0 when there is none */
-    unsigned flag;          /* pz_cli_option bit */
+    uint64_t flag;          /* PZ_CLI_OPT_* bit */
     int takes_value;
 } option_spec;
 
@@ -91,6 +91,18 @@ static const option_spec option_table[] = {
     {"scheme", 0, PZ_CLI_OPT_SCHEME, 1},
     {"relax", 0, PZ_CLI_OPT_RELAX, 1},
     {"features", 0, PZ_CLI_OPT_FEATURES, 1},
+    {"max-corners", 0, PZ_CLI_OPT_MAX_CORNERS, 1},
+    {"max-strain", 0, PZ_CLI_OPT_MAX_STRAIN, 1},
+    {"symmetry", 0, PZ_CLI_OPT_SYMMETRY, 1},
+    {"prepare", 0, PZ_CLI_OPT_PREPARE, 1},
+    {"seam-allowance", 0, PZ_CLI_OPT_SEAM_ALLOWANCE, 1},
+    {"hem-allowance", 0, PZ_CLI_OPT_HEM_ALLOWANCE, 1},
+    {"allowances", 0, PZ_CLI_OPT_ALLOWANCES, 1},
+    {"notch-spacing", 0, PZ_CLI_OPT_NOTCH_SPACING, 1},
+    {"paper", 0, PZ_CLI_OPT_PAPER, 1},
+    {"fabric-width", 0, PZ_CLI_OPT_FABRIC_WIDTH, 1},
+    {"gap", 0, PZ_CLI_OPT_GAP, 1},
+    {"dxf-strict", 0, PZ_CLI_OPT_DXF_STRICT, 0},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 
@@ -189,12 +201,12 @@ static pz_status apply_option(pz_cli_args *args, const option_spec *spec, const 
     case PZ_CLI_OPT_SEAMS: args->seam_paths[args->seam_path_count++] = value; return PZ_OK;
     case PZ_CLI_OPT_DARTS: args->dart_paths[args->dart_path_count++] = value; return PZ_OK;
     }
-    if (spec->flag >= (1u << PZ_CLI_VALUE_FIRST_BIT)) {
+    if (spec->flag >= (UINT64_C(1) << PZ_CLI_VALUE_FIRST_BIT)) {
         /* Value options: the command parses the text; given twice is a mistake worth naming. */
         const char **slot = &args->values[pz_cli_value_index(spec->flag)];
         if (*slot)
             return pz_error(ctx, PZ_ERR_USAGE, "%s: --%s given twice", command, spec->long_name);
-        *slot = value;
+        *slot = value ? value : "1"; /* a flag among them (--dxf-strict) reads as "1" */
         return PZ_OK;
     }
     return pz_error(ctx, PZ_ERR_INTERNAL, "%s: option table and parser disagree", command);
@@ -204,7 +216,7 @@ static pz_status apply_option(pz_cli_args *args, const option_spec *spec, const 
  * Parses one option argument argv[*index] ("--name", "--name=value", "-c");
  * advances *index past a separate value.
  */
-static pz_status parse_option(pz_cli_args *args, unsigned accepted, int argc, char **argv, int *index,
+static pz_status parse_option(pz_cli_args *args, uint64_t accepted, int argc, char **argv, int *index,
                               pz_ctx *ctx)
 {
     const char *arg = argv[*index];

@@ -11,6 +11,8 @@ packages=(
   libcgal-dev             # remeshing, exact predicates, polygon offsets
   libtinygltf-dev nlohmann-json3-dev libstb-dev   # glTF in and out (libtinygltf.so)
   libcjson-dev            # JSON reports and JSON inputs
+  libcairo2-dev           # pattern.pdf and pattern-tiled.pdf
+  python3-ezdxf librsvg2-bin poppler-utils   # tests read our DXF, SVG and PDF with real readers
   clang libclang-rt-14-dev  # libFuzzer targets
 )
 

@@ -1,0 +1,6 @@
+/*
+ * export/dxf.c -- (being written)
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "export/export.h"

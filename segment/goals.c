@@ -1,0 +1,6 @@
+/*
+ * segment/goals.c -- (being written)
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "segment/segment.h"

@@ -1,0 +1,6 @@
+/*
+ * segment/layout.c -- (being written)
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "segment/segment.h"

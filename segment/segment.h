@@ -1,0 +1,211 @@
+/*
+ * segment/segment.h -- the segmentation stage: from a garment, its
+ * cross-field and the tracing graph to a patch layout whose every panel
+ * meets the goals (pietroni2022 Sec. 3.1 and 4.2).
+ *
+ *   pz_symmetry_detect   a mirror plane of the garment and the vertex mirror map
+ *   pz_segment_goals     does one panel (a set of faces) meet the goals?
+ *   pz_segment           the whole layout: candidates, greedy insertion,
+ *                        recursion into failing panels, removal in reverse
+ *                        order, darts, symmetry, sketches
+ *
+ * A layout is a set of cut edges (flags over pz_topology_build(mesh)
+ * edges). Panels are the connected components of faces across uncut edges.
+ * A cut chain that ends inside a panel (one end on no other cut and not on
+ * the boundary) is a dart slit: its free end is the tip. pz_pattern_build
+ * (param/param.h) takes the result as face_panel + extra_cuts (the cut edges
+ * that have the same panel on both sides: dart slits) and finds the seams and
+ * darts itself.
+ *
+ * Goals of a panel (pietroni2022 Sec. 3.1; docs/segment.md gives the details):
+ *  - it is a topological disk (darts' slits are part of its boundary);
+ *  - it has at most max_corners corners (vertices of its outline where the
+ *    neighbouring panel changes, plus sharp turns of the outline);
+ *  - its flattening (LSCM start + a few textile iterations, grain given) is
+ *    injective and every triangle's warp and weft strain lies within
+ *    +-max_strain.
+ *
+ * Conventions of mesh/mesh.h. Deterministic: the result never depends on
+ * the thread count or timing.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_SEGMENT_H
+#define PZ_SEGMENT_H
+
+#include "field/field.h"
+#include "mesh/mesh.h"
+#include "trace/trace.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------ */
+/* Symmetry                                                                  */
+/* ------------------------------------------------------------------------ */
+
+typedef enum pz_symmetry_mode {
+    PZ_SYMMETRY_AUTO = 0,  /* detect: the best of the x, y, z planes through the centroid, if good enough */
+    PZ_SYMMETRY_OFF = 1,
+    PZ_SYMMETRY_X = 2,     /* the plane x = c (normal along x) */
+    PZ_SYMMETRY_Y = 3,
+    PZ_SYMMETRY_Z = 4
+} pz_symmetry_mode;
+
+typedef struct pz_symmetry {
+    int found;                 /* 1: a plane is in use */
+    int axis;                  /* 0, 1, 2: the plane's normal axis; -1 none */
+    double normal[3], offset;  /* plane: dot(normal, p) = offset */
+    double residual_mm;        /* RMS distance of the mirrored vertices to the surface's nearest vertex */
+    double residual_rel;       /* residual_mm / bounding-box diagonal */
+    int32_t vertex_count;
+    int32_t *vertex_mirror;    /* vertex_count: the vertex nearest to each vertex's mirror image (-1 none) */
+    uint8_t *vertex_side;      /* vertex_count: 0 on the negative side, 1 on the plane (within tolerance), 2 positive */
+} pz_symmetry;
+
+/**
+ * Finds the mirror plane: with PZ_SYMMETRY_AUTO the x, y and z planes through
+ * the area centroid are tried and the one with the smallest residual wins if
+ * residual_rel is below tolerance_rel (0 = 0.005); otherwise found = 0. A
+ * given axis is used whatever its residual (found = 1, residual reported).
+ * Nearest vertices through a uniform grid: O(V) expected. PZ_OFF: found = 0.
+ * Caller frees with pz_symmetry_clear.
+ */
+pz_status pz_symmetry_detect(const pz_mesh *mesh, const pz_topology *topology, pz_symmetry_mode mode,
+                             double tolerance_rel, pz_symmetry *out, pz_ctx *ctx);
+void pz_symmetry_clear(pz_symmetry *symmetry);
+
+/**
+ * The mirror image of a path through vertex_mirror: every vertex mirrored,
+ * gaps between mirrored neighbours that share no edge closed by the shortest
+ * edge path, arms mirrored through the graph (the arm closest to the
+ * reflected direction). PZ_ERR_DATA when a vertex has no mirror.
+ */
+pz_status pz_symmetry_mirror_path(const pz_symmetry *symmetry, const pz_trace_graph *graph, const pz_mesh *mesh,
+                                  const pz_topology *topology, const pz_trace_path *path, pz_trace_path *out,
+                                  pz_ctx *ctx);
+
+/* ------------------------------------------------------------------------ */
+/* Goals                                                                     */
+/* ------------------------------------------------------------------------ */
+
+/** Why a panel misses its goals (bit set). */
+enum pz_goal_failure {
+    PZ_GOAL_NOT_DISK = 1u << 0,
+    PZ_GOAL_CORNERS = 1u << 1,
+    PZ_GOAL_STRAIN = 1u << 2,
+    PZ_GOAL_NOT_INJECTIVE = 1u << 3
+};
+
+typedef struct pz_goal_options {
+    int32_t max_corners;         /* C; 0 = 8 */
+    double max_strain;           /* S: |strain| bound on every triangle (>= 0) */
+    double grain[3];             /* the warp axis in 3D (unit) */
+    int textile_iterations;      /* 0 = the default of docs/segment.md */
+} pz_goal_options;
+
+typedef struct pz_goal_result {
+    unsigned failures;           /* enum pz_goal_failure bits; 0 = goals met */
+    int32_t corners;
+    int32_t boundary_loops;
+    double max_abs_strain;       /* worst |warp| or |weft| strain over the panel's triangles (-1: not flattened) */
+    int32_t flipped_triangles;
+} pz_goal_result;
+
+/**
+ * Evaluates one panel: the faces face_ids[0..count-1] of `mesh` (a valid
+ * garment with topology), `edge_cut` the layout's cut edges (the corners
+ * depend on which neighbour lies across each outline edge; the panel's own
+ * slits are cut). Flattens only when the panel is a disk. Thread-safe (call
+ * it from several threads at once).
+ */
+pz_status pz_segment_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
+                           const int32_t *face_ids, int32_t count, const pz_goal_options *options,
+                           pz_goal_result *out, pz_ctx *ctx);
+
+/** "not a disk, 11 corners > 8, strain 0.071 > 0.05, 3 flipped triangles" into buf (goals met: "ok"). */
+void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *options, char *buf, size_t size);
+
+/* ------------------------------------------------------------------------ */
+/* The layout                                                                */
+/* ------------------------------------------------------------------------ */
+
+typedef struct pz_segment_options {
+    int32_t max_corners;         /* C; 0 = 8 */
+    double max_strain;           /* S (>= 0; pz_segment_options_default sets 0.05) */
+    pz_symmetry_mode symmetry;   /* default AUTO */
+    int darts;                   /* 1: insert darts (default), 0: none */
+    double grain[3];             /* 3D warp axis (unit); pz_segment_options_default: +z */
+    const pz_sketch *sketch;     /* curves that become seams never removed, or NULL */
+    int32_t max_candidates;      /* candidate paths sampled per level; 0 = default */
+    int32_t max_depth;           /* recursion levels into failing panels; 0 = default */
+    int threads;                 /* OpenMP threads; 0 = default. The result does not depend on it. */
+    pz_trace_graph_options graph;
+    /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts", "symmetry"),
+     * current panel count and worst strain over the panels evaluated so far. */
+    void (*on_progress)(void *user, const char *stage, int32_t panel_count, double worst_strain);
+    void *user;
+} pz_segment_options;
+
+void pz_segment_options_default(pz_segment_options *options);
+
+/** A seam path of the final layout, for layout.obj and the report. */
+typedef enum pz_layout_curve_kind {
+    PZ_LAYOUT_SEAM = 0,          /* separates two panels (or a panel and itself) */
+    PZ_LAYOUT_DART = 1,          /* a dart slit, tip at vertices[0] */
+    PZ_LAYOUT_SKETCH = 2         /* a sketched seam (kept whatever the goals) */
+} pz_layout_curve_kind;
+
+typedef struct pz_layout_curve {
+    pz_layout_curve_kind kind;
+    int closed;
+    int32_t vertex_count;
+    int32_t *vertices;           /* garment vertices along cut edges */
+} pz_layout_curve;
+
+typedef struct pz_segment_panel {
+    int32_t face_count;
+    int32_t corners;
+    int32_t darts;
+    int32_t mirror_panel;        /* the panel that is its mirror image, itself when it straddles the plane, -1 */
+    pz_goal_result goals;        /* at the final layout */
+} pz_segment_panel;
+
+typedef struct pz_segment_result {
+    int32_t face_count, edge_count;
+    int32_t *face_panel;         /* face_count: 0 .. panel_count-1, numbered in order of first face */
+    int32_t panel_count;
+    uint8_t *edge_cut;           /* edge_count: 1 = cut (seam or dart slit) */
+    uint8_t *extra_cuts;         /* edge_count: cut edges with the same panel on both sides (dart slits):
+                                    the extra_cuts argument of pz_pattern_build */
+    pz_segment_panel *panels;    /* panel_count */
+    int32_t curve_count;
+    pz_layout_curve *curves;     /* the layout split at junctions */
+    int32_t dart_count;
+    int goals_met;               /* every panel meets its goals */
+    char reasons[512];           /* when not: "panel 3: strain 0.071 > 0.05; ..." (truncated) */
+    pz_symmetry symmetry;        /* the plane used (found = 0: none) */
+    double symmetry_residual_mm; /* RMS distance between the layout's cut edges and their mirror images */
+    /* Counters and timings. */
+    int32_t candidate_count, inserted_count, removed_count, evaluation_count;
+    double graph_ms, candidates_ms, insert_ms, remove_ms, darts_ms, total_ms;
+} pz_segment_result;
+
+/**
+ * Builds the layout of a valid garment (millimetres) guided by its
+ * cross-field (field->directions). The run always ends: when the goals cannot
+ * be met (S = 0 on a sphere, a budget exhausted), the best layout found is
+ * returned with goals_met = 0 and the reasons, still PZ_OK. A closed surface
+ * gets loops; several components are segmented each on its own.
+ * Errors: PZ_ERR_USAGE (bad options), PZ_ERR_NOMEM, PZ_ERR_INTERNAL.
+ */
+pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field,
+                     const pz_segment_options *options, pz_segment_result **out, pz_ctx *ctx);
+void pz_segment_result_free(pz_segment_result **result);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PZ_SEGMENT_H */
