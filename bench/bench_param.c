@@ -6,7 +6,7 @@
  * parameterization (20 iterations, no early stop) and LSCM, and prints one
  * line per run:
  *   bench_param mesh=... backend=textile faces=... init_ms=... iteration_ms=...
- *               total_ms=... iterations=... damped=... peak_bytes_per_face=... load=...
+ *               total_ms=... iterations=... damped=... threads=... peak_bytes_per_face=... load=...
  * iterations counts the global steps run (the textile iteration stops early
  * when a step cannot lower the energy: docs/param.md, "Monotone steps"),
  * damped those that were backtracked, load is the 1-minute load average
@@ -15,7 +15,9 @@
  * peak_bytes_per_face is the growth of the process's peak resident size
  * (getrusage) during the run divided by the face count; runs go from small
  * to large so each one can raise the peak (0 means it stayed below an
- * earlier peak). Usage: bench_param [MAX_FACES] (default 200000).
+ * earlier peak). Usage: bench_param [MAX_FACES [THREADS]] (default 200000
+ * faces, THREADS 0 = pz_param_textile's default: threaded from 100K faces;
+ * an explicit count >= 2 threads from 8K faces, see docs/param.md).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -36,7 +38,7 @@ static long peak_kb(void)
     return usage.ru_maxrss;
 }
 
-static int run(const char *name, pz_mesh *mesh)
+static int run(const char *name, pz_mesh *mesh, int threads)
 {
     pz_ctx ctx;
     pz_ctx_init(&ctx);
@@ -53,7 +55,7 @@ static int run(const char *name, pz_mesh *mesh)
     }
     long before = peak_kb();
     double start = pz_seconds();
-    pz_textile_options options = {.iterations = 20, .tolerance = 1e-300};
+    pz_textile_options options = {.iterations = 20, .tolerance = 1e-300, .threads = threads};
     pz_textile_result result;
     if (pz_param_textile(&pattern, &options, uv, &result, &ctx)) {
         fprintf(stderr, "bench_param: %s\n", ctx.error);
@@ -62,9 +64,9 @@ static int run(const char *name, pz_mesh *mesh)
     double total = 1e3 * (pz_seconds() - start);
     long after = peak_kb();
     printf("bench_param mesh=%s backend=textile faces=%d init_ms=%.1f iteration_ms=%.2f total_ms=%.1f "
-           "iterations=%d damped=%d peak_bytes_per_face=%.0f load=%.2f\n",
+           "iterations=%d damped=%d threads=%d peak_bytes_per_face=%.0f load=%.2f\n",
            name, mesh->face_count, result.init_ms, result.iteration_ms, total, result.iterations_run,
-           result.damped_steps, 1024.0 * (double)(after - before) / mesh->face_count, bench_load_average());
+           result.damped_steps, threads, 1024.0 * (double)(after - before) / mesh->face_count, bench_load_average());
     before = after;
     start = pz_seconds();
     if (pz_param_lscm_pattern(&pattern, NULL, uv, &ctx)) {
@@ -85,6 +87,7 @@ static int run(const char *name, pz_mesh *mesh)
 int main(int argc, char **argv)
 {
     long max_faces = argc > 1 ? atol(argv[1]) : 200000;
+    int threads = argc > 2 ? atoi(argv[2]) : 0;
     pz_ctx ctx;
     pz_ctx_init(&ctx);
     ctx.quiet = 1;
@@ -100,7 +103,7 @@ int main(int argc, char **argv)
         }
         char name[64];
         snprintf(name, sizeof name, "hemisphere-%d", sizes[i]);
-        int failed = run(name, mesh);
+        int failed = run(name, mesh, threads);
         pz_mesh_free(&mesh);
         if (failed)
             return 1;
@@ -111,7 +114,7 @@ int main(int argc, char **argv)
     pz_mesh *scan = NULL;
     if (pz_mesh_read(path, &scan, &ctx) == PZ_OK) {
         pz_mesh_to_mm(scan, PZ_UNITS_AUTO, NULL);
-        int failed = run("face-scan", scan);
+        int failed = run("face-scan", scan, threads);
         pz_mesh_free(&scan);
         if (failed)
             return 1;

@@ -14,6 +14,9 @@
  *     fragments_s=0.1 decimate_s=2.5 remesh_s=0.4 poses_s=0.0 hausdorff_s=1.4 hausdorff_mm=0.4
  *     bound_mm=3.7 peak_mb=900 over_input_mb=650
  *
+ * and a second line with each step's peak resident size (MB, sampled every
+ * millisecond) and the load average; stderr gets what each step did.
+ *
  * Targets (issue 8): total_s < 10 and peak_mb < 2048 on two cores. Exit
  * status 1 when a step fails (the message is on stderr).
  *
@@ -21,12 +24,53 @@
  */
 #include "mesh/mesh.h"
 
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "bench_util.h"
+
+/*
+ * Resident size sampled every millisecond by a thread while pz_prepare runs,
+ * so each step's peak can be read off its time window afterwards (the steps
+ * run one after the other and report their seconds; the few ms between them
+ * blur the windows' edges a little).
+ */
+#define SAMPLES_MAX 200000
+typedef struct rss_sampler {
+    atomic_int stop;
+    int count;
+    double when[SAMPLES_MAX];
+    long kb[SAMPLES_MAX];
+} rss_sampler;
+
+static void *sample_rss(void *data)
+{
+    rss_sampler *sampler = data;
+    struct timespec pause = {0, 1000000};
+    while (!atomic_load(&sampler->stop) && sampler->count < SAMPLES_MAX) {
+        sampler->when[sampler->count] = pz_seconds();
+        sampler->kb[sampler->count++] = bench_status_kb("VmRSS");
+        nanosleep(&pause, NULL);
+    }
+    return NULL;
+}
+
+/* The largest sample in [from, to] seconds, in MB (the nearest sample before `from` when none falls inside). */
+static double peak_mb(const rss_sampler *sampler, double from, double to)
+{
+    long peak = -1, before = -1;
+    for (int i = 0; i < sampler->count; ++i) {
+        if (sampler->when[i] < from)
+            before = sampler->kb[i];
+        else if (sampler->when[i] <= to && sampler->kb[i] > peak)
+            peak = sampler->kb[i];
+    }
+    return (peak >= 0 ? peak : before) / 1024.0;
+}
 
 /* Splits the mesh along x = 0: faces on the right get their own copies of the vertices they share. */
 static int unweld_halves(pz_mesh *mesh)
@@ -79,14 +123,21 @@ int main(int argc, char **argv)
     long before_kb = bench_status_kb("VmRSS");
     pz_prepare_options options = {.target_faces = target};
     pz_prepare_result *result = NULL;
+    static rss_sampler sampler; /* 3 MB: not on the stack */
+    pthread_t sampling;
+    int sampled = pthread_create(&sampling, NULL, sample_rss, &sampler) == 0;
     double start = pz_seconds();
     clock_t cpu_start = clock();
-    if (pz_prepare(mesh, &options, &result, &ctx) != PZ_OK) {
+    pz_status status = pz_prepare(mesh, &options, &result, &ctx);
+    double total = pz_seconds() - start;
+    atomic_store(&sampler.stop, 1);
+    if (sampled)
+        pthread_join(sampling, NULL);
+    if (status != PZ_OK) {
         fprintf(stderr, "bench_prepare: %s\n", ctx.error);
         pz_mesh_free(&mesh);
         return 1;
     }
-    double total = pz_seconds() - start;
     /* CPU seconds too: wall time on a shared, loaded machine overstates the work */
     double cpu = (double)(clock() - cpu_start) / CLOCKS_PER_SEC;
     long peak_kb = bench_status_kb("VmHWM");
@@ -101,6 +152,17 @@ int main(int argc, char **argv)
            "over_input_mb=%.0f\n",
            (int)r->welded_vertices, (int)result->seam_count, (int)r->decimated_faces, r->hausdorff,
            r->hausdorff_bound, peak_kb / 1024.0, (peak_kb - before_kb) / 1024.0);
+    /* each step's window, laid end to end from the start: its peak resident size */
+    printf("bench_prepare_peaks input_mb=%.0f", before_kb / 1024.0);
+    double from = start;
+    for (int s = 0; s < PZ_PREPARE_STEP_COUNT; ++s) {
+        printf(" %s_mb=%.0f", r->steps[s].name, sampled ? peak_mb(&sampler, from, from + r->steps[s].seconds) : -1.0);
+        from += r->steps[s].seconds;
+    }
+    printf(" load=%.1f\n", bench_load_average());
+    fflush(stdout);
+    for (int s = 0; s < PZ_PREPARE_STEP_COUNT; ++s) /* what each step did, for the note */
+        fprintf(stderr, "  %s: %s\n", r->steps[s].name, r->steps[s].detail);
     pz_prepare_result_free(&result);
     pz_mesh_free(&mesh);
     return 0;

@@ -3,14 +3,15 @@
  * full relaxation, as in IISERM Figs. 7-8 (time and remaining energy).
  *
  * For generated hemispheres (one panel) of about 5K and 20K faces, runs the
- * heap release with a single path and with multi-path (8 paths), and the
- * heap release with phase two run to a 0.01% energy variation (heap-tight:
- * how far the default 0.05% rule stops from the minimum), and the
- * full release (wang2002 InitFlatten) unless the mesh has more than
- * MAX_FULL_FACES faces, and prints one line per run:
- *   bench_springmass mesh=... relax=heap|multi|heap-tight|full faces=... phase_one_ms=...
- *       phase_two_ms=... total_ms=... relaxations=... phase_one_relaxations=...
- *       phase_one_energy=... final_energy=... e_area=... e_shape=... sweeps=...
+ * heap release with a single path and with multi-path (8 paths), the heap
+ * release with phase two as the paper's node sweeps only (heap-local:
+ * local_release_only, no global release), and the full release (wang2002
+ * InitFlatten) unless the mesh has more than MAX_FULL_FACES faces (and
+ * full-local below 10000 faces), and prints one line per run:
+ *   bench_springmass mesh=... relax=heap|multi|heap-local|full|full-local faces=...
+ *       phase_one_ms=... phase_two_ms=... total_ms=... relaxations=...
+ *       phase_one_relaxations=... global_iterations=... phase_one_energy=...
+ *       final_energy=... e_area=... e_shape=... sweeps=...
  * Usage: bench_springmass [MAX_FULL_FACES] (default 25000; full relaxation
  * grows as faces^2).
  *
@@ -45,10 +46,10 @@ static int run(const char *name, pz_mesh *mesh, const char *label, const pz_spri
     }
     double total = 1e3 * (pz_seconds() - start);
     printf("bench_springmass mesh=%s relax=%s faces=%d phase_one_ms=%.1f phase_two_ms=%.1f total_ms=%.1f "
-           "relaxations=%lld phase_one_relaxations=%lld phase_one_energy=%.6g final_energy=%.6g e_area=%.5f "
+           "relaxations=%lld phase_one_relaxations=%lld global_iterations=%lld phase_one_energy=%.6g final_energy=%.6g e_area=%.5f "
            "e_shape=%.5f sweeps=%d\n",
            name, label, mesh->face_count, result.phase_one_ms, result.phase_two_ms, total, result.node_relaxations,
-           result.phase_one_relaxations, result.phase_one_energy, result.final_energy, result.panels[0].e_area,
+           result.phase_one_relaxations, result.global_iterations, result.phase_one_energy, result.final_energy, result.panels[0].e_area,
            result.panels[0].e_shape, result.panels[0].iterations);
     fflush(stdout);
     pz_springmass_result_clear(&result);
@@ -73,10 +74,11 @@ int main(int argc, char **argv)
         char name[64];
         snprintf(name, sizeof name, "hemisphere-%d", (int)sizes[i]);
         pz_springmass_options heap = {0}, multi = {.heap_paths = 8}, full = {.relax = 1};
-        pz_springmass_options tight = {.energy_variation = 1e-4, .max_iterations = 3000};
+        pz_springmass_options heap_local = {.local_release_only = 1}, full_local = {.relax = 1, .local_release_only = 1};
         int failed = run(name, mesh, "heap", &heap) || run(name, mesh, "multi", &multi) ||
-                     run(name, mesh, "heap-tight", &tight) ||
-                     (mesh->face_count <= max_full && run(name, mesh, "full", &full));
+                     run(name, mesh, "heap-local", &heap_local) ||
+                     (mesh->face_count <= max_full && run(name, mesh, "full", &full)) ||
+                     (mesh->face_count < 10000 && run(name, mesh, "full-local", &full_local));
         pz_mesh_free(&mesh);
         if (failed)
             return 1;

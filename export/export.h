@@ -42,6 +42,9 @@ typedef struct pz_notch {
     int32_t seam;                /* pattern seam index, or -1 for a dart notch */
     int32_t dart;                /* pattern dart index, or -1 */
     char label[16];              /* "A1": the same on both partners of a seam */
+    double cut_point[2];         /* where the ray from position along direction meets the cut line */
+    double depth_mm;             /* notch length, drawn from cut_point inward (-direction):
+                                    min(notch_depth_mm, the local allowance) */
 } pz_notch;
 
 /** An internal line drawn on a piece (dart legs, the dart's fold line). */
@@ -54,9 +57,10 @@ typedef struct pz_piece_line {
 typedef struct pz_piece {
     int32_t panel;
     char name[48];               /* "panel_K" or the given name */
-    int32_t cut_quantity;        /* 1, or 2 for a mirrored pair counted on one piece */
+    int32_t cut_quantity;        /* 1, or 2 ("Cut 2 mirrored") for the first piece of a mirrored pair */
     int32_t mirror_piece;        /* index of the piece that is its mirror image (-1 none) */
-    int mirrored;                /* 1: this piece is the mirror ("Cut 2 mirrored" is printed on the first) */
+    int mirrored;                /* 1: the second of a mirrored pair: its partner carries "Cut 2 mirrored",
+                                    so SVG/PDF/DXF/marker do not draw it on its own */
     int32_t sew_count;
     double *sew;                 /* sew_count x 2: the sew line, closed, counter-clockwise (outer loop) */
     int32_t *sew_vertex;         /* sew_count: the cut-mesh vertex of each sew point */
@@ -83,10 +87,9 @@ typedef struct pz_pieces {
 /** Export options. pz_export_options_default fills the defaults. */
 typedef struct pz_export_options {
     double seam_allowance_mm;    /* default 10 */
-    double hem_allowance_mm;     /* open edges (not on a seam); default = seam_allowance_mm */
-    int32_t allowance_override_count;
-    const int32_t *allowance_override_seam;  /* pattern seam ids ... */
-    const double *allowance_override_mm;     /* ... and their allowance */
+    double hem_allowance_mm;     /* open edges (not on a seam); < 0 (the default, -1) = seam_allowance_mm */
+    const double *seam_allowances_mm; /* pattern->seam_count (may be NULL): per-seam allowance, < 0 = default
+                                         (from --allowances FILE, pz_export_read_allowances) */
     double notch_spacing_mm;     /* default 100 */
     double notch_depth_mm;       /* default 5 (never deeper than the allowance) */
     const char *paper;           /* "a4" (default) or "letter" */
@@ -100,6 +103,15 @@ typedef struct pz_export_options {
 void pz_export_options_default(pz_export_options *options);
 
 /**
+ * Reads a per-seam allowance file (--allowances FILE, format in
+ * docs/export.md: one `PANEL_A PANEL_B MM` line per seam, `#` comments) into
+ * *out (pattern->seam_count values, -1 where the file says nothing; caller
+ * frees). PZ_ERR_OPEN when unreadable, PZ_ERR_DATA naming the file and line
+ * (bad numbers, a panel pair with no seam, a negative allowance).
+ */
+pz_status pz_export_read_allowances(const char *path, const pz_pattern *pattern, double **out, pz_ctx *ctx);
+
+/**
  * Builds every piece of a flattened pattern: sew line = the panel's outer
  * boundary in uv (the slits of darts included as their legs), cut line =
  * sew line offset outward by each edge's allowance (mitred corners, acute
@@ -107,13 +119,33 @@ void pz_export_options_default(pz_export_options *options);
  * seam side and every notch_spacing_mm along it at equal arc length on both
  * partners, dart legs and tips as internal lines with notches, grainline,
  * areas. panel_mirror (panel_count, may be NULL): the mirror panel of each
- * panel (pz_segment_panel.mirror_panel) for cut quantities. panel_names
+ * panel (pz_segment_panel.mirror_panel): when two pieces are mirror images
+ * in 2D as well (within 1 mm RMS), the first gets cut_quantity 2 and the
+ * second mirrored = 1. panel_names
  * (may be NULL, entries may be NULL). Caller frees with pz_pieces_free.
+ * Piece i is panel i. The cut line closes every dart's V by the line across
+ * its mouth (a folded dart: never cut into). Notches: cut_point and depth_mm
+ * say where to draw them (from the cut line inward). Details and choices:
+ * docs/export.md. PZ_ERR_USAGE for a negative allowance or depth or a
+ * spacing <= 0, PZ_ERR_DATA for a panel without boundary or with fewer than
+ * 3 distinct outline points, PZ_ERR_NOMEM; *out stays NULL on failure.
  */
 pz_status pz_pieces_build(const pz_pattern *pattern, const double *uv, const pz_export_options *options,
                           const int32_t *panel_mirror, const char *const *panel_names, pz_pieces **out,
                           pz_ctx *ctx);
 void pz_pieces_free(pz_pieces **pieces);
+
+/**
+ * One sheet for the drawn pieces (mirrored == 0), laid out in rows by their
+ * cut-line boxes, tallest first, gap_mm apart and from the edges, below a
+ * band of reserve_top_mm left free at the top (title, 10 cm scale box).
+ * offsets (piece_count x 2, written): piece point (x, y) goes to (x +
+ * offsets[2i], y + offsets[2i+1]) on the sheet, y up, inside [0, size[0]] x
+ * [0, size[1]] (size written, mm). Mirrored pieces get offset 0. Writers that
+ * draw y down use size[1] - y. Deterministic.
+ */
+void pz_pieces_sheet_layout(const pz_pieces *pieces, double gap_mm, double reserve_top_mm, double *offsets,
+                            double size[2]);
 
 /* ------------------------------------------------------------------------ */
 /* Marker                                                                    */
@@ -141,12 +173,18 @@ typedef struct pz_marker {
  * fabric_width_mm along x, growing along y, rotations 0 or 180 degrees
  * only, pairs placed side by side, gap_mm between pieces (method in
  * docs/marker.md). PZ_ERR_DATA when a piece is wider than the fabric in both
- * rotations. Caller frees with pz_marker_free.
+ * rotations or has a non-finite cut-line coordinate, PZ_ERR_USAGE for a
+ * fabric width that is not finite, PZ_ERR_NOMEM. Deterministic. Caller
+ * frees with pz_marker_free.
  */
 pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *options, pz_marker **out, pz_ctx *ctx);
 void pz_marker_free(pz_marker **marker);
 
-/** The transformed cut line of a placement into out (piece cut_count x 2). */
+/**
+ * Places point_count points of `piece` (its cut or sew line, grainline, ...)
+ * as `placement` does: x -> -x when mirrored, then a turn by rotation_deg
+ * about the origin, then + offset. out: point_count x 2 (may be `points`).
+ */
 void pz_marker_place_points(const pz_piece *piece, const pz_marker_placement *placement, const double *points,
                             int32_t point_count, double *out);
 
@@ -166,7 +204,7 @@ typedef struct pz_export_inputs {
     const pz_export_options *options;
     const char *const *panel_names;  /* may be NULL */
     const cJSON *report;             /* report.json's content (report.html shows it) */
-    const double *layout_vertices;   /* may be NULL: seam polylines on the garment for garment.glb ... */
+    const int32_t *layout_vertices;  /* may be NULL: seam polylines on the garment (garment vertex ids) ... */
     const int32_t *layout_offsets;   /* ... curve i = layout_vertices garment ids [offsets[i], offsets[i+1]) */
     int32_t layout_curve_count;
 } pz_export_inputs;

@@ -15,6 +15,10 @@
  * left empty. Memory: a Surface_mesh is ~ 250 bytes per face; the AABB tree
  * ~ 150 bytes per triangle.
  *
+ * Threads: closest points build 2 AABB trees in parallel for big surfaces and
+ * split the queries over the cores (std::thread); every thread writes its own
+ * slice of the output, so the results do not depend on the threads.
+ *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "cgal_shim.h"
@@ -31,10 +35,14 @@
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Midpoint_placement.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
+#include <memory>
 #include <new>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -192,6 +200,62 @@ extern "C" pz_status pz_cgal_remesh(const pz_cgal_surface *in, double target_edg
     }
 }
 
+namespace {
+
+/*
+ * Runs job(0) .. job(count - 1) on count threads (job 0 on the caller's) and
+ * rethrows the first exception once all have finished. Each job writes only
+ * its own slice, so results do not depend on the threads' timing.
+ */
+template <typename Job> void run_parallel(size_t count, const Job &job)
+{
+    std::vector<std::exception_ptr> failures(count);
+    std::vector<std::thread> threads;
+    auto guarded = [&](size_t i) {
+        try {
+            job(i);
+        } catch (...) {
+            failures[i] = std::current_exception();
+        }
+    };
+    try {
+        for (size_t i = 1; i < count; ++i)
+            threads.emplace_back(guarded, i);
+    } catch (...) {
+        for (std::thread &thread : threads)
+            thread.join();
+        throw;
+    }
+    guarded(0);
+    for (std::thread &thread : threads)
+        thread.join();
+    for (const std::exception_ptr &failure : failures)
+        if (failure)
+            std::rethrow_exception(failure);
+}
+
+/* Threads for the queries: the cores, at most 8; one for small jobs. */
+size_t query_threads(int32_t query_count)
+{
+    size_t cores = std::thread::hardware_concurrency();
+    if (query_count < 20000 || cores < 2)
+        return 1;
+    return cores < 8 ? cores : 8;
+}
+
+} // namespace
+
+/*
+ * Building the AABB tree is sequential and takes most of the time for a big
+ * surface (1M triangles: ~1 s), so above TREE_SPLIT_FACES the triangles are
+ * split into TREE_COUNT slices, one tree each, built in parallel, and every
+ * query takes the closest of the trees' answers (the lower slice on a tie).
+ * TREE_COUNT is fixed, not the core count, so the face chosen on a tie (a
+ * point closest to an edge) is the same on every machine.
+ */
+#define TREE_SPLIT_FACES 200000
+#define TREE_COUNT 2
+
 extern "C" pz_status pz_cgal_closest_points(const double *positions, int32_t vertex_count, const int32_t *faces,
                                             int32_t face_count, const double *queries, int32_t query_count,
                                             double *closest, int32_t *face, pz_ctx *ctx)
@@ -210,15 +274,35 @@ extern "C" pz_status pz_cgal_closest_points(const double *positions, int32_t ver
                          *c = positions + 3 * (size_t)faces[3 * f + 2];
             triangles.emplace_back(Point(a[0], a[1], a[2]), Point(b[0], b[1], b[2]), Point(c[0], c[1], c[2]));
         }
-        Tree tree(triangles.cbegin(), triangles.cend());
-        tree.accelerate_distance_queries();
-        for (int32_t q = 0; q < query_count; ++q) {
-            const double *p = queries + 3 * (size_t)q;
-            auto hit = tree.closest_point_and_primitive(Point(p[0], p[1], p[2]));
-            for (int k = 0; k < 3; ++k)
-                closest[3 * (size_t)q + k] = hit.first[k];
-            face[q] = (int32_t)(hit.second - triangles.cbegin());
-        }
+        size_t tree_count = face_count >= TREE_SPLIT_FACES ? TREE_COUNT : 1;
+        std::vector<std::unique_ptr<Tree>> trees(tree_count);
+        /* Built and accelerated before any query: queries on a built tree are read-only. */
+        run_parallel(tree_count, [&](size_t t) {
+            trees[t].reset(new Tree(triangles.cbegin() + (ptrdiff_t)(triangles.size() * t / tree_count),
+                                    triangles.cbegin() + (ptrdiff_t)(triangles.size() * (t + 1) / tree_count)));
+            trees[t]->build();
+            trees[t]->accelerate_distance_queries();
+        });
+        size_t threads = query_threads(query_count);
+        run_parallel(threads, [&](size_t t) {
+            int32_t first = (int32_t)((size_t)query_count * t / threads);
+            int32_t last = (int32_t)((size_t)query_count * (t + 1) / threads);
+            for (int32_t q = first; q < last; ++q) {
+                const double *p = queries + 3 * (size_t)q;
+                Point point(p[0], p[1], p[2]);
+                double best = INFINITY;
+                for (const std::unique_ptr<Tree> &tree : trees) {
+                    auto hit = tree->closest_point_and_primitive(point);
+                    double d = CGAL::squared_distance(point, hit.first);
+                    if (d < best) {
+                        best = d;
+                        for (int k = 0; k < 3; ++k)
+                            closest[3 * (size_t)q + k] = hit.first[k];
+                        face[q] = (int32_t)(hit.second - triangles.cbegin());
+                    }
+                }
+            }
+        });
         return PZ_OK;
     } catch (...) {
         return report_exception("closest points", ctx);

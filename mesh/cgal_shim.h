@@ -57,6 +57,8 @@ pz_status pz_cgal_remesh(const pz_cgal_surface *in, double target_edge, int iter
  * For each of query_count points (query_count x 3), the closest point on the
  * triangles (faces x 3 into positions) and the face it lies on, through an
  * AABB tree: O((F + Q) log F). closest: query_count x 3, face: query_count.
+ * Uses up to 8 threads for many queries (and two trees, built in parallel,
+ * above 200K triangles); the answers do not depend on the thread count.
  */
 pz_status pz_cgal_closest_points(const double *positions, int32_t vertex_count, const int32_t *faces,
                                  int32_t face_count, const double *queries, int32_t query_count, double *closest,

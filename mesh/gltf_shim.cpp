@@ -94,6 +94,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
+#include "gltf_shim.h"
 
 #include <tiny_gltf.h>
 #include <nlohmann/json.hpp>
@@ -1660,4 +1661,142 @@ extern "C" pz_status pz_gltf_read_memory(const unsigned char *data, size_t size,
 extern "C" pz_status pz_glb_write(const pz_mesh *mesh, const char *path, const pz_write_options *options, pz_ctx *ctx)
 {
     return guarded(ctx, path, [&]() -> pz_status { return write_glb(mesh, path, options, ctx); });
+}
+
+/* ------------------------------------------------------------------ */
+/* garment.glb: colours per panel, pattern texcoords, seam lines      */
+/* ------------------------------------------------------------------ */
+
+/*
+ * pz_glb_write_garment (mesh/gltf_shim.h, for export/glb.c): the same buffer
+ * layout as pz_glb_write (GlbBuilder: tight, 4-byte aligned views with their
+ * targets), one mesh with a TRIANGLES primitive whose vertices are the given
+ * ones (no regrouping: the caller's vertices are already split where the
+ * pattern differs) and COLOR_0 as float VEC3 in linear space, plus a LINES
+ * primitive; the bytes go to the caller's stream (the export writes all
+ * files through temporaries and renames them together).
+ */
+
+namespace {
+
+void check_garment(const pz_glb_garment *garment, const std::string &what)
+{
+    if (garment->face_count <= 0 || garment->vertex_count <= 0)
+        fail(PZ_ERR_INVALID_MESH, what + ": a glTF mesh needs at least one face");
+    for (int64_t i = 0; i < 3 * (int64_t)garment->face_count; ++i)
+        if (garment->faces[i] < 0 || garment->faces[i] >= garment->vertex_count)
+            fail(PZ_ERR_INVALID_MESH, what + ": face " + std::to_string(i / 3) + " has a vertex index out of range");
+    for (int64_t i = 0; i < garment->line_index_count; ++i)
+        if (garment->line_indices[i] < 0 || garment->line_indices[i] >= garment->line_point_count)
+            fail(PZ_ERR_INVALID_MESH, what + ": seam line index out of range");
+    if (garment->line_index_count % 2)
+        fail(PZ_ERR_INVALID_MESH, what + ": seam lines need pairs of indices");
+    for (int64_t i = 0; i < 3 * (int64_t)garment->vertex_count; ++i)
+        if (!std::isfinite((float)garment->positions[i]))
+            fail(PZ_ERR_INVALID_MESH, what + ": vertex " + std::to_string(i / 3) + " is not a finite float");
+    for (int64_t i = 0; i < 3 * (int64_t)garment->line_point_count; ++i)
+        if (!std::isfinite((float)garment->line_points[i]))
+            fail(PZ_ERR_INVALID_MESH, what + ": a seam point is not a finite float");
+}
+
+tinygltf::Material plain_material(const char *name, double grey)
+{
+    tinygltf::Material material;
+    material.name = name;
+    material.pbrMetallicRoughness.baseColorFactor = {grey, grey, grey, 1.0};
+    material.pbrMetallicRoughness.metallicFactor = 0.0;
+    material.pbrMetallicRoughness.roughnessFactor = 0.9;
+    material.doubleSided = true;
+    return material;
+}
+
+void build_garment_model(GlbBuilder &builder, const pz_glb_garment *garment)
+{
+    tinygltf::Model &model = builder.model;
+    model.asset.version = "2.0";
+    model.asset.generator = kGenerator;
+    size_t vertex_count = (size_t)garment->vertex_count;
+    /* Normals through the mesh helper: a pz_mesh view of the borrowed arrays. */
+    pz_mesh view{};
+    view.vertex_count = garment->vertex_count;
+    view.face_count = garment->face_count;
+    view.positions = const_cast<double *>(garment->positions);
+    view.faces = const_cast<int32_t *>(garment->faces);
+    std::vector<double> normals = vertex_normals(&view);
+    std::vector<float> positions(vertex_count * 3), normal_floats(vertex_count * 3), colours(vertex_count * 3),
+        texcoords;
+    for (size_t v = 0; v < vertex_count; ++v) {
+        uint32_t colour = kPalette[(size_t)std::max(garment->vertex_group[v], 0) % 12];
+        for (int d = 0; d < 3; ++d) {
+            positions[3 * v + d] = (float)garment->positions[3 * v + d];
+            normal_floats[3 * v + d] = (float)normals[3 * v + d];
+            colours[3 * v + d] = (float)srgb_to_linear((colour >> (24 - 8 * d) & 0xff) / 255.0);
+        }
+    }
+    if (garment->texcoords) {
+        texcoords.resize(vertex_count * 2);
+        for (size_t v = 0; v < vertex_count; ++v) {
+            texcoords[2 * v] = (float)garment->texcoords[2 * v];
+            texcoords[2 * v + 1] = (float)(1.0 - garment->texcoords[2 * v + 1]);
+        }
+    }
+    std::vector<uint32_t> indices(garment->faces, garment->faces + 3 * (size_t)garment->face_count);
+
+    tinygltf::Mesh mesh;
+    mesh.name = garment->name ? garment->name : "garment";
+    tinygltf::Primitive surface;
+    surface.mode = TINYGLTF_MODE_TRIANGLES;
+    surface.attributes["POSITION"] = builder.add_floats(positions, 3, true);
+    surface.attributes["NORMAL"] = builder.add_floats(normal_floats, 3, false);
+    surface.attributes["COLOR_0"] = builder.add_floats(colours, 3, false);
+    if (garment->texcoords)
+        surface.attributes["TEXCOORD_0"] = builder.add_floats(texcoords, 2, false);
+    surface.indices = builder.add_indices(indices);
+    model.materials.push_back(plain_material("panels", 1.0)); /* white: COLOR_0 shows as is */
+    surface.material = 0;
+    mesh.primitives.push_back(std::move(surface));
+
+    if (garment->line_index_count > 0) {
+        std::vector<float> points((size_t)garment->line_point_count * 3);
+        for (size_t i = 0; i < points.size(); ++i)
+            points[i] = (float)garment->line_points[i];
+        std::vector<uint32_t> segments(garment->line_indices, garment->line_indices + garment->line_index_count);
+        tinygltf::Primitive seams;
+        seams.mode = TINYGLTF_MODE_LINE;
+        seams.attributes["POSITION"] = builder.add_floats(points, 3, true);
+        seams.indices = builder.add_indices(segments);
+        model.materials.push_back(plain_material("seams", 0.02));
+        seams.material = 1;
+        mesh.primitives.push_back(std::move(seams));
+    }
+    model.meshes.push_back(std::move(mesh));
+    tinygltf::Node node;
+    node.mesh = 0;
+    node.name = garment->name ? garment->name : "garment";
+    model.nodes.push_back(node);
+    tinygltf::Scene scene;
+    scene.nodes = {0};
+    model.scenes.push_back(scene);
+    model.defaultScene = 0;
+    model.buffers[0].data.resize((model.buffers[0].data.size() + 3) & ~(size_t)3, 0);
+}
+
+} // namespace
+
+extern "C" pz_status pz_glb_write_garment(const pz_glb_garment *garment, FILE *file, const char *what, pz_ctx *ctx)
+{
+    const char *shown = what ? what : "garment.glb";
+    return guarded(ctx, shown, [&]() -> pz_status {
+        check_garment(garment, shown);
+        GlbBuilder builder;
+        build_garment_model(builder, garment);
+        std::ostringstream stream;
+        tinygltf::TinyGLTF writer;
+        if (!writer.WriteGltfSceneToStream(&builder.model, stream, false, true))
+            fail(PZ_ERR_INTERNAL, std::string(shown) + ": tinygltf could not serialize the model");
+        const std::string bytes = stream.str();
+        if (std::fwrite(bytes.data(), 1, bytes.size(), file) != bytes.size() || std::fflush(file) != 0)
+            fail(PZ_ERR_CREATE, std::string(shown) + ": write error");
+        return PZ_OK;
+    });
 }

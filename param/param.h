@@ -154,6 +154,13 @@ typedef struct pz_textile_options {
      * and of every accepted iterate: non-increasing (docs/param.md). */
     void (*on_iteration)(void *user, int iteration, double energy);
     void *user;
+    /* A seam whose two sides, after the LSCM start, are further from mirror
+     * images than this (RMS residual of the best-fit reflection over the
+     * seam's 3D length) cannot be sewn as a mirror seam (a collar band on a
+     * neckline, a sleeve cap in an armhole): it is held to equal length only,
+     * segment by segment. 0 = 0.05; a huge value keeps every seam a mirror
+     * seam (the paper's Eq. 8 everywhere). docs/param.md. */
+    double seam_mirror_tolerance;
 } pz_textile_options;
 
 /** Outcomes that are not errors. */
@@ -166,6 +173,7 @@ typedef struct pz_textile_result {
     double solve_ms;          /* all iterations */
     double iteration_ms;      /* mean per iteration */
     int damped_steps;         /* global steps shortened (backtracked) to keep the energy from rising or faces from flipping */
+    int32_t length_only_seams; /* seams held to equal length only (seam_mirror_tolerance) */
 } pz_textile_result;
 
 /**
@@ -196,6 +204,11 @@ typedef struct pz_feature_curve {
     pz_feature_kind kind;
     int32_t vertex_count;
     int32_t *vertices;         /* cut-mesh vertices (pattern->mesh) */
+    double *turning;           /* key curves, optional (NULL: Eq. 1 keeps the 3D shape): the user's 2D shape,
+                                  vertex_count signed turning angles (radians, > 0 = turning left in the
+                                  pattern plane); used at vertices inside the panel with a curve vertex on
+                                  each side, ignored at the ends and on the boundary (Eq. 1 there). Owned:
+                                  freed by pz_feature_curves_free */
 } pz_feature_curve;
 
 typedef struct pz_feature_curves {
@@ -244,8 +257,11 @@ typedef struct pz_wirewarp_result {
     int interior_inverse_length; /* 1: the interior uses Eq. 11's 1/length weights (asked, or the
                                     cotangent solve flipped faces and these flipped fewer) */
     int injective;               /* pz_metrics_compute: no flipped face, no boundary crossing */
-    int32_t flipped_triangles;
+    int32_t flipped_triangles;   /* after the untangling; > 0 also sets best_effort */
     double angle_ms, layout_ms, interior_ms;
+    int32_t untangled_vertices;  /* interior vertex moves that unflipped faces (wires never move) */
+    int32_t trimmed_feature_edges; /* edges given up at the free ends of dangling feature curves because the
+                                    interior folded there (best_effort is then set; docs/wirewarp.md) */
 } pz_wirewarp_result;
 
 /**
@@ -360,6 +376,8 @@ typedef struct pz_springmass_options {
     double accuracy;         /* E_S and E_C target of phase two; 0 = 0.01 */
     double energy_variation; /* relative energy change that stops a release; 0 = 0.0005 */
     int trial_cut;           /* 1: cut each panel along its suggested line, re-flatten, classify dart/gusset */
+    int local_release_only;  /* 1: phase two is only the paper's node sweeps; 0 (default): isotropic phase two
+                                starts with a global (local-global, CHOLMOD) release, docs/springmass.md */
 } pz_springmass_options;
 
 typedef enum pz_springmass_stop {
@@ -379,6 +397,7 @@ typedef struct pz_springmass_panel {
     int32_t panel;
     int stop;                   /* pz_springmass_stop of phase two */
     int iterations;             /* phase-two sweeps */
+    int global_iterations;      /* phase-two global release iterations (0: orthotropic or local_release_only) */
     double phase_one_energy;    /* E(Phi) (Eq. 3) after phase one */
     double final_energy;        /* E(Phi) at the end */
     double e_area, e_shape;     /* wang2002 Eqs. 4 and 6 at the end */
@@ -400,6 +419,8 @@ typedef struct pz_springmass_result {
     long long phase_one_relaxations; /* of which during phase one */
     long long energy_evaluations;    /* node energy evaluations */
     double phase_one_ms, phase_two_ms;
+    long long global_iterations;     /* local-global iterations of phase two's global release (each one
+                                        touches every spring and solves once with the factored Laplacian) */
 } pz_springmass_result;
 
 /**

@@ -26,9 +26,14 @@
  *         (single path, Sec. 3.1), or on up to heap_paths paths whose number
  *         grows as 2^(level-2) (multi-path, Sec. 3.2, Eq. 5), are relaxed.
  *
- * Phase two (wang2002 Sec. 5-6.2): sweeps over all nodes until E_S (Eq. 4)
+ * Phase two (wang2002 Sec. 5-6.2): for the isotropic springs, first a global
+ * release (local-global iterations with one CHOLMOD factorization of the
+ * spring Laplacian; see global_release: node sweeps alone stop far from the
+ * minimum on large panels), then sweeps over all nodes until E_S (Eq. 4)
  * and E_C (Eq. 6) are both below the accuracy, or the energy (Eq. 3) varies
- * less than energy_variation, or max_iterations sweeps.
+ * less than energy_variation, or max_iterations sweeps; a diverging sweep
+ * is undone (see DIVERGENCE_RISE). Faces still flipped at the end are
+ * untangled geometrically (pz_param_untangle, wirewarp.c).
  *
  * Node relaxation, isotropic. The force of Eq. 2 (C = 0.5) moves the node as
  * Eqs. 11-13 with the node starting at rest: dq = dt^2 / (2 m_i) f_i. The
@@ -68,16 +73,21 @@
  * with the material on its left.
  *
  * Cost: phase one heap O(F log F) plus the paths; full O(F * n * sweeps);
- * phase two O(n * sweeps). Memory O(n + F). Failure: PZ_ERR_NOMEM;
+ * phase two one sparse factorization plus O(n) per global iteration (two
+ * triangular solves) and per sweep. Memory O(n + F) plus the factor. Failure: PZ_ERR_NOMEM;
  * PZ_ERR_DATA when a panel cannot be reached from its seed through edges.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "param.h"
 
+#include <cholmod.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* From wirewarp.c: moves vertices of flipped faces into the kernel of their star. */
+int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
 
 #define SM_PI 3.14159265358979323846
 #define SM_SPRING_C 0.5          /* wang2002 Sec. 5: C = 0.5 */
@@ -186,6 +196,7 @@ typedef struct sm_settings {
     double grain[3];
     int max_iterations, phase_one_iterations;
     double accuracy, energy_variation;
+    int local_only;         /* phase two without the global release */
 } sm_settings;
 
 /* Over-relaxation of the isotropic move in the whole-system sweeps of phase
@@ -218,7 +229,11 @@ typedef struct sm_panel {
     long long relaxations, evaluations;
 } sm_panel;
 
-static double dist2d(const double *a, const double *b) { return hypot(a[0] - b[0], a[1] - b[1]); }
+/* sqrt of the squares, not hypot: pattern coordinates are far from overflow, and glibc's hypot was a
+ * quarter of the 20K-face run's time (perf) */
+static double norm2d(double x, double y) { return sqrt(x * x + y * y); }
+
+static double dist2d(const double *a, const double *b) { return norm2d(a[0] - b[0], a[1] - b[1]); }
 
 static double dist3d(const double *a, const double *b)
 {
@@ -477,7 +492,7 @@ static void overlap_penalty(sm_panel *p, int32_t v)
         const int32_t *c = p->mesh->faces + 3 * f;
         int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
         const double *a = p->uv + 2 * c[(k + 1) % 3], *b = p->uv + 2 * c[(k + 2) % 3];
-        double ex = b[0] - a[0], ey = b[1] - a[1], length = hypot(ex, ey);
+        double ex = b[0] - a[0], ey = b[1] - a[1], length = norm2d(ex, ey);
         if (length <= 0)
             continue;
         double h = (ex * (q[1] - a[1]) - ey * (q[0] - a[0])) / length; /* > 0: v on the face's side */
@@ -500,7 +515,7 @@ static void relax_isotropic(sm_panel *p, int32_t v)
         if (!p->edge_active[e])
             continue;
         const double *w = p->uv + 2 * edge_other(p, e, v);
-        double dx = w[0] - q[0], dy = w[1] - q[1], length = hypot(dx, dy);
+        double dx = w[0] - q[0], dy = w[1] - q[1], length = norm2d(dx, dy);
         stiffness += SM_SPRING_C;
         if (length <= 0)
             continue;
@@ -569,14 +584,24 @@ static void sweep(sm_panel *p)
         relax_node(p, p->placed_order[i]);
 }
 
-/* wang2002 EnergyRelease with the energy-variation and iteration rules (and
- * the accuracy rule when check_accuracy); returns the stop reason. */
-static int energy_release(sm_panel *p, int max_sweeps, int check_accuracy, int *sweeps_run)
+/* A whole-system sweep that raises the energy by more than this fraction
+ * diverges: the overlap penalty of Eqs. 14-15 is not part of the energy, and
+ * on a badly tangled phase-one result (a face scan: the paper's Fig. 14
+ * case) penalty pushes and SOR feed each other until the coordinates
+ * overflow. Phase two then restores the positions before that sweep, drops
+ * to plain Gauss-Seidel (omega = 1), and stops if it rises again. */
+#define DIVERGENCE_RISE 0.01
+
+/* wang2002 EnergyRelease with the energy-variation and iteration rules (and,
+ * in phase two (backup != NULL), the accuracy rule and the divergence guard);
+ * returns the stop reason. backup: nv x 2 scratch or NULL. */
+static int energy_release(sm_panel *p, int max_sweeps, double *backup, int *sweeps_run)
 {
     double previous = total_energy(p);
+    size_t bytes = (size_t)p->nv * 2 * sizeof(double);
     int stop = PZ_SPRINGMASS_STOP_ITERATIONS, run = 0;
     for (;;) {
-        if (check_accuracy) {
+        if (backup) {
             double e_area, e_shape;
             accuracy(p, &e_area, &e_shape);
             if (e_area <= p->settings->accuracy && e_shape <= p->settings->accuracy) {
@@ -586,9 +611,20 @@ static int energy_release(sm_panel *p, int max_sweeps, int check_accuracy, int *
         }
         if (run >= max_sweeps)
             break;
+        if (backup)
+            memcpy(backup, p->uv, bytes);
         sweep(p);
         ++run;
         double current = total_energy(p);
+        if (backup && !(current <= previous * (1 + DIVERGENCE_RISE))) {
+            memcpy(p->uv, backup, bytes);
+            if (p->omega > 1) {
+                p->omega = 1;
+                continue;
+            }
+            stop = PZ_SPRINGMASS_STOP_VARIATION; /* the energy no longer falls */
+            break;
+        }
         if (previous <= 0 || fabs(current - previous) <= p->settings->energy_variation * previous) {
             stop = PZ_SPRINGMASS_STOP_VARIATION;
             break;
@@ -598,6 +634,156 @@ static int energy_release(sm_panel *p, int max_sweeps, int check_accuracy, int *
     if (sweeps_run)
         *sweeps_run = run;
     return stop;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Global release (phase two, isotropic)                                     */
+/* ------------------------------------------------------------------------ */
+
+/* Node sweeps remove a long-wavelength strain one ring per sweep, so on large
+ * panels the energy-variation rule stops them far from the minimum. The
+ * spring energy sum C/2 (|x_a - x_b| - d_e)^2 is also min over unit vectors
+ * r_e of sum C/2 |x_a - x_b - d_e r_e|^2, which local-global iterations
+ * minimize (the "fast mass-spring" / projective scheme): r_e = the current
+ * edge direction (local), then the positions from one linear solve with the
+ * spring Laplacian (global), factored once by CHOLMOD. Each iteration cannot
+ * raise the energy; a tiny proximal term GLOBAL_PROXIMAL |x - x_old|^2 fixes
+ * the translation. A step that would flip more faces (the spring energy has
+ * no barrier; the node sweeps after it keep the overlap penalty) or raise the
+ * energy is halved up to GLOBAL_HALVINGS times, then undone, ending the
+ * release. */
+#define GLOBAL_MAX_ITERATIONS 200
+#define GLOBAL_PROXIMAL 1e-8
+#define GLOBAL_STOP 1e-5 /* relative energy decrease per iteration that ends the release */
+#define GLOBAL_HALVINGS 4 /* a step that flips faces is shortened up to 4 times before the release ends */
+
+static int32_t flipped_faces(const sm_panel *p)
+{
+    int32_t count = 0;
+    for (int32_t f = 0; f < p->nf; ++f) {
+        const int32_t *c = p->mesh->faces + 3 * f;
+        const double *a = p->uv + 2 * c[0], *b = p->uv + 2 * c[1], *d = p->uv + 2 * c[2];
+        count += (b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1]) <= 0;
+    }
+    return count;
+}
+
+/* The spring Laplacian C L + GLOBAL_PROXIMAL I, lower triangle. */
+static cholmod_sparse *spring_laplacian(const sm_panel *p, cholmod_common *cc)
+{
+    size_t n = (size_t)p->nv;
+    cholmod_triplet *t = cholmod_allocate_triplet(n, n, n + (size_t)p->ne, -1, CHOLMOD_REAL, cc);
+    if (!t)
+        return NULL;
+    int32_t *ti = t->i, *tj = t->j;
+    double *tx = t->x;
+    for (int32_t v = 0; v < p->nv; ++v) {
+        ti[v] = tj[v] = v;
+        tx[v] = GLOBAL_PROXIMAL;
+    }
+    size_t at = n;
+    for (int32_t e = 0; e < p->ne; ++e) {
+        int32_t a = p->edge_vertices[2 * e], b = p->edge_vertices[2 * e + 1];
+        tx[a] += SM_SPRING_C;
+        tx[b] += SM_SPRING_C;
+        ti[at] = a > b ? a : b;
+        tj[at] = a > b ? b : a;
+        tx[at++] = -SM_SPRING_C;
+    }
+    t->nnz = at;
+    cholmod_sparse *matrix = cholmod_triplet_to_sparse(t, at, cc);
+    cholmod_free_triplet(&t, cc);
+    return matrix;
+}
+
+/* Right-hand side of the global step: sum_e C d_e r_e (local step) plus the proximal pull. */
+static void global_rhs(const sm_panel *p, double *b)
+{
+    int32_t n = p->nv;
+    for (int32_t v = 0; v < n; ++v) {
+        b[v] = GLOBAL_PROXIMAL * p->uv[2 * v];
+        b[n + v] = GLOBAL_PROXIMAL * p->uv[2 * v + 1];
+    }
+    for (int32_t e = 0; e < p->ne; ++e) {
+        int32_t a = p->edge_vertices[2 * e], c = p->edge_vertices[2 * e + 1];
+        double dx = p->uv[2 * a] - p->uv[2 * c], dy = p->uv[2 * a + 1] - p->uv[2 * c + 1], length = norm2d(dx, dy);
+        if (length <= 0)
+            continue;
+        double scale = SM_SPRING_C * p->rest[e] / length;
+        b[a] += scale * dx;
+        b[n + a] += scale * dy;
+        b[c] -= scale * dx;
+        b[n + c] -= scale * dy;
+    }
+}
+
+/* wang2002's accuracy rule: E_S and E_C both within the permissible accuracy. */
+static int accurate(const sm_panel *p)
+{
+    double e_area, e_shape;
+    accuracy(p, &e_area, &e_shape);
+    return e_area <= p->settings->accuracy && e_shape <= p->settings->accuracy;
+}
+
+/* Runs the global release until the accuracy rule holds, the energy settles or
+ * GLOBAL_MAX_ITERATIONS; returns the iterations kept (0 when the factorization fails). */
+static int global_release(sm_panel *p, pz_ctx *ctx, pz_status *status)
+{
+    cholmod_common cc;
+    cholmod_start(&cc);
+    cc.print = 0;
+    cc.supernodal = CHOLMOD_SIMPLICIAL; /* the supernodal BLAS calls cost more on these small 2D meshes (perf) */
+    int32_t n = p->nv, kept = 0;
+    cholmod_sparse *matrix = spring_laplacian(p, &cc);
+    cholmod_factor *factor = matrix ? cholmod_analyze(matrix, &cc) : NULL;
+    cholmod_dense *rhs = cholmod_zeros((size_t)n, 2, CHOLMOD_REAL, &cc);
+    double *previous_uv = malloc((size_t)n * 2 * sizeof(double) + 1);
+    *status = PZ_OK;
+    if (!matrix || !factor || !rhs || !previous_uv) {
+        if (cc.status == CHOLMOD_OUT_OF_MEMORY || !previous_uv)
+            *status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory for the global release");
+        goto done;
+    }
+    if (!cholmod_factorize(matrix, factor, &cc) || cc.status != CHOLMOD_OK)
+        goto done; /* not definite (cannot happen for a connected panel): the node sweeps alone */
+    double energy = total_energy(p);
+    int32_t flipped = flipped_faces(p);
+    while (kept < GLOBAL_MAX_ITERATIONS && energy > 0 && !accurate(p)) {
+        memcpy(previous_uv, p->uv, (size_t)n * 2 * sizeof(double));
+        global_rhs(p, rhs->x);
+        cholmod_dense *x = cholmod_solve(CHOLMOD_A, factor, rhs, &cc);
+        if (!x)
+            break;
+        /* the full step, else shorter ones toward it (GLOBAL_HALVINGS) */
+        const double *s = x->x;
+        double current = HUGE_VAL, t = 1;
+        int accepted = 0;
+        for (int halving = 0; halving <= GLOBAL_HALVINGS && !accepted; ++halving, t /= 2) {
+            for (int32_t v = 0; v < n; ++v) {
+                p->uv[2 * v] = previous_uv[2 * v] + t * (s[v] - previous_uv[2 * v]);
+                p->uv[2 * v + 1] = previous_uv[2 * v + 1] + t * (s[n + v] - previous_uv[2 * v + 1]);
+            }
+            current = total_energy(p);
+            accepted = current <= energy && flipped_faces(p) <= flipped;
+        }
+        cholmod_free_dense(&x, &cc);
+        if (!accepted) {
+            memcpy(p->uv, previous_uv, (size_t)n * 2 * sizeof(double));
+            break;
+        }
+        ++kept;
+        int settled = energy - current <= GLOBAL_STOP * energy;
+        energy = current;
+        if (settled)
+            break;
+    }
+done:
+    free(previous_uv);
+    cholmod_free_dense(&rhs, &cc);
+    cholmod_free_factor(&factor, &cc);
+    cholmod_free_sparse(&matrix, &cc);
+    cholmod_finish(&cc);
+    return kept;
 }
 
 /* IISERM Sec. 3: relax the nodes on the paths from the heap root down the larger children. */
@@ -701,7 +887,7 @@ static void place_by_circles(sm_panel *p, int32_t f, int k)
     int32_t v1 = c[(k + 1) % 3], v2 = c[(k + 2) % 3], v3 = c[k];
     const double *x = p->mesh->positions, *p1 = p->uv + 2 * v1, *p2 = p->uv + 2 * v2;
     double r1 = dist3d(x + 3 * v1, x + 3 * v3), r2 = dist3d(x + 3 * v2, x + 3 * v3);
-    double ex = p2[0] - p1[0], ey = p2[1] - p1[1], d = hypot(ex, ey);
+    double ex = p2[0] - p1[0], ey = p2[1] - p1[1], d = norm2d(ex, ey);
     double *q = p->uv + 2 * v3;
     if (d <= 0) {
         q[0] = p1[0] + r1;
@@ -765,7 +951,7 @@ static void flatten_face(sm_panel *p, int32_t f)
     if (p->settings->heap)
         heap_release(p);
     else
-        energy_release(p, p->settings->phase_one_iterations, 0, NULL);
+        energy_release(p, p->settings->phase_one_iterations, NULL, NULL);
 }
 
 static pz_status phase_one(sm_panel *p, pz_ctx *ctx)
@@ -861,6 +1047,7 @@ typedef struct sm_outcome {
     double phase_one_energy, final_energy, e_area, e_shape;
     double phase_one_ms, phase_two_ms;
     long long relaxations, phase_one_relaxations, evaluations;
+    int global_iterations;
 } sm_outcome;
 
 /* Flattens one disk mesh into uv (nv x 2); fills map (nv, may be NULL) and
@@ -881,8 +1068,27 @@ static pz_status flatten_disk(const pz_mesh *mesh, const sm_settings *settings, 
     outcome->phase_one_relaxations = p.relaxations;
     outcome->phase_one_energy = total_energy(&p);
     start = pz_seconds();
+    if (!settings->orthotropic && !settings->local_only) {
+        outcome->global_iterations = global_release(&p, ctx, &status);
+        if (status) {
+            panel_free(&p);
+            return status;
+        }
+    }
     p.omega = PHASE_TWO_OMEGA;
-    outcome->stop = energy_release(&p, settings->max_iterations, 1, &outcome->iterations);
+    double *backup = malloc((size_t)p.nv * 2 * sizeof(double) + 1);
+    if (!backup) {
+        panel_free(&p);
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    }
+    outcome->stop = energy_release(&p, settings->max_iterations, backup, &outcome->iterations);
+    free(backup);
+    /* folds left by phase one (the shared mannequin: 76 faces, 35 after this): the
+     * springs have no barrier, so unflip them geometrically (no flip added) */
+    if (flipped_faces(&p) > 0 && pz_param_untangle(mesh, NULL, uv) < 0) {
+        panel_free(&p);
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    }
     outcome->phase_two_ms = 1e3 * (pz_seconds() - start);
     outcome->final_energy = total_energy(&p);
     accuracy(&p, &outcome->e_area, &outcome->e_shape);
@@ -1024,6 +1230,7 @@ static void settings_from(const pz_springmass_options *options, sm_settings *s)
     s->phase_one_iterations = options->phase_one_iterations > 0 ? options->phase_one_iterations : 50;
     s->accuracy = options->accuracy > 0 ? options->accuracy : 0.01;
     s->energy_variation = options->energy_variation > 0 ? options->energy_variation : 0.0005;
+    s->local_only = options->local_release_only;
 }
 
 /* One panel of the pattern: extract, flatten, write back, fill its record. */
@@ -1061,6 +1268,7 @@ static pz_status flatten_panel(const pz_pattern *pattern, int32_t panel, const i
     record->panel = panel;
     record->stop = outcome.stop;
     record->iterations = outcome.iterations;
+    record->global_iterations = outcome.global_iterations;
     record->phase_one_energy = outcome.phase_one_energy;
     record->final_energy = outcome.final_energy;
     record->e_area = outcome.e_area;
@@ -1088,6 +1296,7 @@ static pz_status flatten_panel(const pz_pattern *pattern, int32_t panel, const i
     result->phase_one_relaxations += outcome.phase_one_relaxations;
     result->energy_evaluations += outcome.evaluations;
     result->phase_one_ms += outcome.phase_one_ms;
+    result->global_iterations += outcome.global_iterations;
     result->phase_two_ms += outcome.phase_two_ms;
 done:
     free(line);

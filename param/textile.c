@@ -21,7 +21,9 @@
  *         (2x2 Procrustes in closed form), edge targets R (X'_j - X'_i).
  *     Seams (Eqs. 7-8): the best-fit reflection M (Procrustes with det = -1,
  *     plus translation) of side a onto side b; targets (M p + q)/2 and
- *     (p + M^-1 q)/2. Darts (Eq. 9): the axis through the tip that best fits
+ *     (p + M^-1 q)/2. A seam whose sides cannot be mirror images (a collar
+ *     band on a neckline: classify_seams, at the start) gets equal lengths
+ *     of facing segments instead (seam_length_targets). Darts (Eq. 9): the axis through the tip that best fits
  *     the leg midpoints (principal direction), targets the averages of each
  *     leg point with its mirrored partner.
  *  3. Global step: minimize Eq. 10 with those coefficients and targets fixed.
@@ -88,16 +90,24 @@
 /* Bounds of the PCG step budget (see pcg_solve). */
 #define PCG_MIN_STEPS 4
 #define PCG_MAX_STEPS 60
+#define FACTOR_FLOP_COST 2.0
 
-/* Below this many faces an iteration takes well under a millisecond and
- * OpenMP's fork/join (and, on a busy machine, descheduled threads at the
- * barriers) costs more than it saves: everything runs on one thread. */
-#define PARALLEL_MIN_FACES 8192
+/* Threads pay only when every parallel region has milliseconds of work:
+ * OpenMP's fork/join, and on a loaded machine threads descheduled while the
+ * others spin at a barrier, cost more than they save below that. Measured on
+ * the 2-core machine at load 3-4, 20K faces: 19 ms per iteration on one
+ * thread, 113 ms on two (2x slower even at load 0.3 with active waiting).
+ * So by default only patterns of PARALLEL_MIN_FACES faces run threaded; an
+ * explicit options->threads >= 2 lowers that to PARALLEL_MIN_FACES_ASKED. */
+#define PARALLEL_MIN_FACES 100000
+#define PARALLEL_MIN_FACES_ASKED 8192
 
 /* Shared with param/lscm.c (see there). */
 double pz_param_face_frame(const double *pos, const int32_t *face, double local[3], double e1[3], double e2[3]);
 pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
 void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const int32_t *order, double *uv);
+cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions, const int32_t *vertex_of,
+                                 cholmod_common *common);
 
 /* One n x n SPD system of one panel and one coordinate, with its own CHOLMOD
  * workspace (CHOLMOD commons are not shared between threads). */
@@ -120,6 +130,9 @@ typedef struct panel_system {
     int32_t vertex_count;
     int32_t *vertices;        /* local -> cut-mesh vertex */
     int32_t *slots;           /* per panel face: 6 value slots: (0,0) (1,1) (2,2) (0,1) (0,2) (1,2) */
+    int32_t segment_count;    /* length-only seam segments in this panel */
+    int32_t *segment_ids;     /* their indices in textile_state's segment arrays */
+    int32_t *segment_slots;   /* their off-diagonal value slot */
     coordinate_solver solver[2];
 } panel_system;
 
@@ -135,7 +148,7 @@ typedef struct textile_state {
     double w_stretch, w_rigid, w_dart, w_seam, regularization;
     double grain[3];
     int threads;
-    int parallel;             /* 1: big enough for threads to pay (PARALLEL_MIN_FACES) */
+    int parallel;             /* 1: big enough for threads to pay (PARALLEL_MIN_FACES*) */
     int across_panels;        /* parallel and several panels: per-panel loops are split across threads */
     int within_panel;         /* parallel and one panel: per-panel loops split their own faces or vertices */
     int32_t pose_total;       /* 1 + poses used */
@@ -152,6 +165,15 @@ typedef struct textile_state {
     double *pull_target;      /* vertex_count x 2: weighted sums of seam/dart targets */
     int32_t *offsets, *order; /* faces bucketed by panel */
     panel_system *panels;
+    /* Seams that cannot be mirror images (classify_seams): their reflection
+     * term is replaced by equal lengths of facing segments. */
+    double mirror_tolerance;
+    uint8_t *seam_length_only;   /* seam_count */
+    int32_t *seam_segment_base;  /* seam_count: first segment of a length-only seam, -1 otherwise */
+    int32_t segment_count;       /* 2 per consecutive pair of a length-only seam: side a, then side b */
+    int32_t *segment_ends;       /* segment_count x 2: cut-mesh vertices (from, to) */
+    double *segment_target;      /* segment_count x 2: the local step's target for to - from */
+    double *segment_weight;      /* segment_count: the seam's length weight (classify_seams) */
 } textile_state;
 
 /* ------------------------------------------------------------------------ */
@@ -184,6 +206,8 @@ static void state_free(textile_state *state)
             solver_free(&state->panels[p].solver[1]);
             free(state->panels[p].vertices);
             free(state->panels[p].slots);
+            free(state->panels[p].segment_ids);
+            free(state->panels[p].segment_slots);
         }
     free(state->panels);
     free(state->frames);
@@ -199,6 +223,11 @@ static void state_free(textile_state *state)
     free(state->pull_target);
     free(state->offsets);
     free(state->order);
+    free(state->seam_length_only);
+    free(state->seam_segment_base);
+    free(state->segment_ends);
+    free(state->segment_target);
+    free(state->segment_weight);
 }
 
 /* Index of entry (row, col), row <= col, in the sorted upper CSC matrix. */
@@ -214,6 +243,25 @@ static int32_t find_slot(const cholmod_sparse *matrix, int32_t row, int32_t col)
             hi = mid;
     }
     return lo;
+}
+
+/* The length-only seam segments of one panel (both ends are in it: a seam
+ * side lies in one panel). 0 when out of memory. */
+static int panel_segments(const textile_state *state, panel_system *system, int32_t panel)
+{
+    int32_t count = 0;
+    for (int32_t g = 0; g < state->segment_count; ++g)
+        count += state->vertex_panel[state->segment_ends[2 * g]] == panel;
+    system->segment_count = count;
+    system->segment_ids = malloc((size_t)count * sizeof(int32_t) + 1);
+    system->segment_slots = malloc((size_t)count * sizeof(int32_t) + 1);
+    if (!system->segment_ids || !system->segment_slots)
+        return 0;
+    count = 0;
+    for (int32_t g = 0; g < state->segment_count; ++g)
+        if (state->vertex_panel[state->segment_ends[2 * g]] == panel)
+            system->segment_ids[count++] = g;
+    return 1;
 }
 
 /* Builds one panel's vertex list, sparsity pattern, slots, and the symbolic
@@ -242,13 +290,18 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
         }
     }
     system->vertex_count = n;
+    if (!panel_segments(state, system, panel)) {
+        snprintf(message, message_size, "textile: out of memory");
+        return PZ_ERR_NOMEM;
+    }
     for (int k = 0; k < 2; ++k) {
         cholmod_start(&system->solver[k].common);
         system->solver[k].started = 1;
         system->solver[k].common.supernodal = CHOLMOD_SIMPLICIAL;
     }
     coordinate_solver *su = &system->solver[0], *sv = &system->solver[1];
-    cholmod_triplet *triplet = cholmod_allocate_triplet(n, n, (size_t)6 * count, 1, CHOLMOD_REAL, &su->common);
+    cholmod_triplet *triplet = cholmod_allocate_triplet(n, n, (size_t)6 * count + system->segment_count, 1,
+                                                        CHOLMOD_REAL, &su->common);
     if (!triplet) {
         snprintf(message, message_size, "textile: out of memory");
         return PZ_ERR_NOMEM;
@@ -265,6 +318,13 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
             tx[triplet->nnz++] = 1;
         }
     }
+    for (int32_t i = 0; i < system->segment_count; ++i) {
+        const int32_t *ends = state->segment_ends + 2 * system->segment_ids[i];
+        int32_t a = state->vertex_local[ends[0]], b = state->vertex_local[ends[1]];
+        ti[triplet->nnz] = a < b ? a : b;
+        tj[triplet->nnz] = a < b ? b : a;
+        tx[triplet->nnz++] = 1;
+    }
     su->matrix = cholmod_triplet_to_sparse(triplet, 0, &su->common);
     cholmod_free_triplet(&triplet, &su->common);
     if (su->matrix) {
@@ -275,11 +335,19 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
                 system->slots[6 * f + e] = find_slot(su->matrix, a < b ? a : b, a < b ? b : a);
             }
         }
-        su->factor = cholmod_analyze(su->matrix, &su->common);
-        /* The factorization costs `ratio` PCG steps (flops: CHOLMOD's count
-         * for the factor against two triangular solves and a product). */
+        for (int32_t i = 0; i < system->segment_count; ++i) {
+            const int32_t *ends = state->segment_ends + 2 * system->segment_ids[i];
+            int32_t a = state->vertex_local[ends[0]], b = state->vertex_local[ends[1]];
+            system->segment_slots[i] = find_slot(su->matrix, a < b ? a : b, a < b ? b : a);
+        }
+        su->factor = pz_param_analyze(su->matrix, mesh->positions, system->vertices, &su->common);
+        /* The factorization costs `ratio` PCG steps: CHOLMOD's flop count for
+         * the factor against two triangular solves and a product, times
+         * FACTOR_FLOP_COST (the flops underestimate it below ~50K unknowns:
+         * measured 16 steps against a count of 6 at 1K unknowns, 40 against
+         * 16 at 10K, 32 against 42 at 100K). Deterministic, unlike timing. */
         double step = 4 * su->common.lnz + 4.0 * ((int *)su->matrix->p)[n];
-        double ratio = step > 0 ? su->common.fl / step : 0;
+        double ratio = step > 0 ? FACTOR_FLOP_COST * su->common.fl / step : 0;
         int max_steps = ratio < PCG_MIN_STEPS ? PCG_MIN_STEPS : ratio > PCG_MAX_STEPS ? PCG_MAX_STEPS : (int)ratio;
         su->max_steps = sv->max_steps = max_steps;
         sv->matrix = cholmod_copy_sparse(su->matrix, &sv->common);
@@ -382,7 +450,134 @@ static pz_status check_correspondences(const pz_pattern *pattern, pz_ctx *ctx)
     return PZ_OK;
 }
 
-static pz_status state_setup(textile_state *state, pz_ctx *ctx)
+/* The best-fit reflection x -> R x + t, R = [[c, s], [s, -c]] (symmetric,
+ * det -1), of side a onto side b (Eqs. 7-8): centroids, then the R
+ * maximizing c (S00 - S11) + s (S01 + S10), S = sum (q - cb)(p - ca)^T. */
+static void fit_reflection(const pz_seam *seam, const double *uv, double *c_out, double *s_out, double t[2])
+{
+    int32_t n = seam->pair_count;
+    double ca[2] = {0, 0}, cb[2] = {0, 0};
+    for (int32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 2; ++k) {
+            ca[k] += uv[2 * seam->side_a[i] + k] / n;
+            cb[k] += uv[2 * seam->side_b[i] + k] / n;
+        }
+    double s00 = 0, s01 = 0, s10 = 0, s11 = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        double px = uv[2 * seam->side_a[i]] - ca[0], py = uv[2 * seam->side_a[i] + 1] - ca[1];
+        double qx = uv[2 * seam->side_b[i]] - cb[0], qy = uv[2 * seam->side_b[i] + 1] - cb[1];
+        s00 += qx * px;
+        s01 += qx * py;
+        s10 += qy * px;
+        s11 += qy * py;
+    }
+    double c = s00 - s11, s = s01 + s10, norm = sqrt(c * c + s * s);
+    if (norm > 0) {
+        c /= norm;
+        s /= norm;
+    } else {
+        c = 1;
+        s = 0;
+    }
+    *c_out = c;
+    *s_out = s;
+    t[0] = cb[0] - (c * ca[0] + s * ca[1]);
+    t[1] = cb[1] - (s * ca[0] - c * ca[1]);
+}
+
+/* RMS distance of side b to side a after the best-fit reflection, over the
+ * 3D length of side a; 0 for a seam of fewer than 2 pairs. */
+static double relative_reflection_residual(const pz_mesh *mesh, const pz_seam *seam, const double *uv)
+{
+    int32_t n = seam->pair_count;
+    if (n < 2)
+        return 0;
+    double c, s, t[2], sum = 0, length = 0;
+    fit_reflection(seam, uv, &c, &s, t);
+    for (int32_t i = 0; i < n; ++i) {
+        const double *p = uv + 2 * seam->side_a[i], *q = uv + 2 * seam->side_b[i];
+        double dx = c * p[0] + s * p[1] + t[0] - q[0], dy = s * p[0] - c * p[1] + t[1] - q[1];
+        sum += dx * dx + dy * dy;
+        if (i > 0) {
+            const double *x = mesh->positions + 3 * seam->side_a[i - 1], *y = mesh->positions + 3 * seam->side_a[i];
+            double d[3] = {x[0] - y[0], x[1] - y[1], x[2] - y[2]};
+            length += sqrt(dot3(d, d));
+        }
+    }
+    return length > 0 ? sqrt(sum / n) / length : 0;
+}
+
+/*
+ * The weight, per segment pair, of a length-only seam of n pairs, relative
+ * to w_seam. A length mismatch D spread evenly along a seam costs the
+ * reflection term about w_seam n D^2 / 24 (the misfit grows linearly along
+ * the seam and each side moves half of it) and the segment term w D^2 /
+ * (2 (n - 1)); equating them makes a length-only seam resist a mismatch as
+ * much as a mirror seam does (with w = w_seam the shirt's sleeve caps ended
+ * 2.9 % apart).
+ */
+static double length_weight(int32_t n)
+{
+    return n * (n - 1) / 12.0;
+}
+
+/*
+ * Which seams can be mirror images (docs/param.md, "Seams that cannot be
+ * mirror images"). At the LSCM start every panel has its own natural flat
+ * shape; a seam whose sides are then further from mirror images than
+ * mirror_tolerance (relative_reflection_residual) is held to equal lengths of
+ * facing segments instead of the reflection: mirror seams (skirt side seams,
+ * a sleeve's underarm) measure 0.2-3.6 % on the test garments, a collar band
+ * on a neckline 25 %, sleeve caps in armholes 8-10 %, and forcing the latter
+ * into reflections takes strains of that order. Builds the segment list and
+ * its weights (length_weight). Returns the number of length-only seams, -1
+ * when out of memory.
+ */
+static int32_t classify_seams(textile_state *state, const double *uv)
+{
+    const pz_pattern *pattern = state->pattern;
+    int32_t ns = pattern->seam_count, pairs = 0, length_only = 0;
+    state->seam_length_only = calloc((size_t)ns + 1, 1);
+    state->seam_segment_base = malloc(((size_t)ns + 1) * sizeof(int32_t));
+    if (!state->seam_length_only || !state->seam_segment_base)
+        return -1;
+    for (int32_t s = 0; s < ns; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        state->seam_segment_base[s] = -1;
+        if (seam->pair_count < 2 || state->w_seam <= 0 ||
+            !(relative_reflection_residual(pattern->mesh, seam, uv) > state->mirror_tolerance))
+            continue;
+        state->seam_length_only[s] = 1;
+        state->seam_segment_base[s] = 2 * pairs;
+        pairs += seam->pair_count - 1;
+        ++length_only;
+    }
+    state->segment_count = 2 * pairs;
+    state->segment_ends = malloc((size_t)state->segment_count * 2 * sizeof(int32_t) + 1);
+    state->segment_target = calloc((size_t)state->segment_count * 2 + 1, sizeof(double));
+    state->segment_weight = malloc((size_t)state->segment_count * sizeof(double) + 1);
+    if (!state->segment_ends || !state->segment_target || !state->segment_weight)
+        return -1;
+    for (int32_t s = 0; s < ns; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        if (!state->seam_length_only[s])
+            continue;
+        int32_t n = seam->pair_count, base = state->seam_segment_base[s];
+        double weight = state->w_seam * length_weight(n);
+        for (int32_t g = base; g < base + 2 * (n - 1); ++g)
+            state->segment_weight[g] = weight;
+        int32_t *ends = state->segment_ends + 2 * (size_t)base;
+        for (int32_t i = 0; i + 1 < n; ++i, ends += 4) {
+            ends[0] = seam->side_a[i];
+            ends[1] = seam->side_a[i + 1];
+            ends[2] = seam->side_b[i];
+            ends[3] = seam->side_b[i + 1];
+        }
+    }
+    return length_only;
+}
+
+static pz_status state_setup(textile_state *state, const double *uv, int32_t *length_only, pz_ctx *ctx)
 {
     const pz_pattern *pattern = state->pattern;
     const pz_mesh *mesh = pattern->mesh;
@@ -407,6 +602,8 @@ static pz_status state_setup(textile_state *state, pz_ctx *ctx)
         state->vertex_local[v] = -1;
     for (size_t i = 0; i < 3 * nf; ++i) /* check_panels: every vertex is in one panel */
         state->vertex_panel[mesh->faces[i]] = pattern->face_panel[i / 3];
+    if ((*length_only = classify_seams(state, uv)) < 0)
+        return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
     compute_frames(state);
     pz_status failed = PZ_OK;
     char message[sizeof ctx->error] = "";
@@ -529,38 +726,15 @@ static double pull(textile_state *state, int32_t v, double weight, const double 
     return weight * (du * du + dv * dv);
 }
 
-/* Eqs. 7-8: best-fit reflection x -> R x + t (R symmetric, det -1) of side a
- * onto side b, midpoint targets for both sides. */
+/* Eqs. 7-8: best-fit reflection M of side a onto side b (fit_reflection),
+ * midpoint targets for both sides. */
 static double seam_targets(textile_state *state, const pz_seam *seam, const double *uv)
 {
     int32_t n = seam->pair_count;
     if (n < 2 || state->w_seam <= 0)
         return 0;
-    double ca[2] = {0, 0}, cb[2] = {0, 0};
-    for (int32_t i = 0; i < n; ++i)
-        for (int k = 0; k < 2; ++k) {
-            ca[k] += uv[2 * seam->side_a[i] + k] / n;
-            cb[k] += uv[2 * seam->side_b[i] + k] / n;
-        }
-    double s00 = 0, s01 = 0, s10 = 0, s11 = 0;
-    for (int32_t i = 0; i < n; ++i) {
-        double px = uv[2 * seam->side_a[i]] - ca[0], py = uv[2 * seam->side_a[i] + 1] - ca[1];
-        double qx = uv[2 * seam->side_b[i]] - cb[0], qy = uv[2 * seam->side_b[i] + 1] - cb[1];
-        s00 += qx * px;
-        s01 += qx * py;
-        s10 += qy * px;
-        s11 += qy * py;
-    }
-    /* R = [[c, s], [s, -c]] maximizes c (S00 - S11) + s (S01 + S10). */
-    double c = s00 - s11, s = s01 + s10, norm = sqrt(c * c + s * s);
-    if (norm > 0) {
-        c /= norm;
-        s /= norm;
-    } else {
-        c = 1;
-        s = 0;
-    }
-    double t[2] = {cb[0] - (c * ca[0] + s * ca[1]), cb[1] - (s * ca[0] - c * ca[1])};
+    double c, s, t[2];
+    fit_reflection(seam, uv, &c, &s, t);
     double energy = 0;
     for (int32_t i = 0; i < n; ++i) {
         const double *p = uv + 2 * seam->side_a[i], *q = uv + 2 * seam->side_b[i];
@@ -571,6 +745,47 @@ static double seam_targets(textile_state *state, const pz_seam *seam, const doub
         double target_b[2] = {(q[0] + mp[0]) / 2, (q[1] + mp[1]) / 2};
         energy += pull(state, seam->side_a[i], state->w_seam, target_a, uv);
         energy += pull(state, seam->side_b[i], state->w_seam, target_b, uv);
+    }
+    return energy;
+}
+
+/*
+ * A length-only seam (classify_seams): for facing segments e_a = a_{i+1} -
+ * a_i and e_b = b_{i+1} - b_i the targets keep each segment's direction and
+ * give both the mean length L = (|e_a| + |e_b|) / 2. Those are the minimizers
+ * of |e_a - L d_a|^2 + |e_b - L d_b|^2 over unit d_a, d_b and L, so the term
+ * is w (|e_a| - |e_b|)^2 / 2 and the local/global step stays a majorization,
+ * like Procrustes for the rigidity term. Matching segment by segment (not
+ * only the totals) keeps facing notches together.
+ */
+static double seam_length_targets(textile_state *state, int32_t seam_index, const double *uv)
+{
+    const pz_seam *seam = &state->pattern->seams[seam_index];
+    double energy = 0;
+    for (int32_t i = 0; i + 1 < seam->pair_count; ++i) {
+        int32_t g = state->seam_segment_base[seam_index] + 2 * i;
+        double w = state->segment_weight[g];
+        double length[2], e[2][2];
+        for (int side = 0; side < 2; ++side) {
+            const int32_t *ends = state->segment_ends + 2 * (g + side);
+            e[side][0] = uv[2 * ends[1]] - uv[2 * ends[0]];
+            e[side][1] = uv[2 * ends[1] + 1] - uv[2 * ends[0] + 1];
+            length[side] = sqrt(e[side][0] * e[side][0] + e[side][1] * e[side][1]);
+        }
+        double mean = (length[0] + length[1]) / 2;
+        for (int side = 0; side < 2; ++side) {
+            const int32_t *ends = state->segment_ends + 2 * (g + side);
+            double *target = state->segment_target + 2 * (g + side);
+            double dx = length[side] > 0 ? e[side][0] / length[side] : 1;
+            double dy = length[side] > 0 ? e[side][1] / length[side] : 0;
+            double scale = ends[0] == ends[1] ? 0 : mean; /* a repeated vertex: no segment (global step skips it) */
+            target[0] = scale * dx;
+            target[1] = scale * dy;
+            double rx = e[side][0] - target[0], ry = e[side][1] - target[1];
+            double term = w * (rx * rx + ry * ry);
+            state->panel_pull[state->vertex_panel[ends[0]]] += term;
+            energy += term;
+        }
     }
     return energy;
 }
@@ -624,7 +839,8 @@ static double local_step(textile_state *state, const double *uv)
     memset(state->pull_target, 0, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
     memset(state->panel_pull, 0, (size_t)pattern->panel_count * sizeof(double));
     for (int32_t s = 0; s < pattern->seam_count; ++s)
-        energy += seam_targets(state, &pattern->seams[s], uv);
+        energy += state->seam_length_only[s] ? seam_length_targets(state, s, uv)
+                                             : seam_targets(state, &pattern->seams[s], uv);
     for (int32_t d = 0; d < pattern->dart_count; ++d)
         energy += dart_targets(state, &pattern->darts[d], uv);
     return energy;
@@ -748,17 +964,24 @@ static int direct_solve(panel_system *system, coordinate_solver *solver, int k, 
  * iteration's matrix, warm-started at the current coordinates. The matrix
  * changes only through the stretch coefficients, which settle as the
  * iteration converges, so the old factor is a near-exact inverse and a few
- * steps reach 1e-8 relative residual at the price of triangular solves
- * instead of a factorization. The step budget is what one factorization
- * costs in PCG steps (flop counts, from about 7 at 1K vertices to 65 at
- * 100K; clamped to 4..60): it returns 0 (uv untouched) when it needs more,
- * and asks for a refactorization when it needed more than half of it (the
- * factor has gone stale). When the matrix keeps changing too much (large,
+ * steps, triangular solves instead of a factorization, reduce the residual
+ * by PCG_REDUCTION from the warm start (or to PCG_TOLERANCE of the
+ * right-hand side), or until the decrease of the quadratic still to gain,
+ * estimated by r^T M^-1 r, is below PCG_MODEL_TOLERANCE of x^T A x (near
+ * convergence the warm start is nearly the solution: 1-2 steps then): the
+ * global step need not be exact, the line search checks every step. The step budget is what one factorization costs in
+ * PCG steps (flop counts, from about 7 at 1K vertices to 65 at 100K;
+ * clamped to 4..60): it returns 0 (uv untouched) when it needs more -- or,
+ * from step PCG_MIN_STEPS on, as soon as its mean rate so far predicts it
+ * would -- and asks for a refactorization when it needed more than half of
+ * it (the factor has gone stale). When the matrix keeps changing too much (large,
  * uneven distortion: the face scan), PCG failures back off exponentially
  * (1, 2, 4, ... direct solves before the next try), so a failing PCG costs
  * at most about as much as the factorizations it was meant to save.
  */
 #define PCG_TOLERANCE 1e-8
+#define PCG_REDUCTION 1e-2
+#define PCG_MODEL_TOLERANCE 1e-9
 static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, double *uv)
 {
     int32_t n = system->vertex_count;
@@ -768,13 +991,18 @@ static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, dou
     for (int32_t l = 0; l < n; ++l)
         current[l] = uv[2 * system->vertices[l] + k];
     symmetric_product(solver->matrix, current, ap);
-    double b_norm = 0, r_norm = 0;
+    double b_norm = 0, r_norm = 0, scale = 0;
     for (int32_t l = 0; l < n; ++l) {
         r[l] = b[l] - ap[l];
         b_norm += b[l] * b[l];
         r_norm += r[l] * r[l];
+        scale += current[l] * ap[l];
     }
-    double goal = PCG_TOLERANCE * PCG_TOLERANCE * fmax(b_norm, 1e-300);
+    /* r^T M^-1 r estimates what the global step's quadratic can still
+     * decrease; x^T A x is its scale (the size of the targets). */
+    double model_goal = PCG_MODEL_TOLERANCE * scale;
+    double initial_norm = r_norm;
+    double goal = fmax(PCG_TOLERANCE * PCG_TOLERANCE * fmax(b_norm, 1e-300), PCG_REDUCTION * PCG_REDUCTION * r_norm);
     double rz = 0;
     int steps = 0, ok = r_norm <= goal;
     while (!ok && steps < solver->max_steps) {
@@ -785,6 +1013,10 @@ static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, dou
         double rz_new = 0;
         for (int32_t l = 0; l < n; ++l)
             rz_new += r[l] * z[l];
+        if (rz_new <= model_goal) {
+            ok = 1;
+            break;
+        }
         double beta = steps ? rz_new / rz : 0;
         rz = rz_new;
         for (int32_t l = 0; l < n; ++l)
@@ -804,6 +1036,13 @@ static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, dou
         }
         ++steps;
         ok = r_norm <= goal;
+        /* Give up early when, at the mean rate so far, the goal lies beyond
+         * the budget (the face scan's first steps: 31 wasted steps each). */
+        if (!ok && steps >= PCG_MIN_STEPS) {
+            double rate = log(r_norm / initial_norm) / steps;
+            if (!(rate < 0) || steps + log(goal / r_norm) / rate > solver->max_steps)
+                break;
+        }
     }
     if (ok)
         for (int32_t l = 0; l < n; ++l)
@@ -850,6 +1089,19 @@ static int solve_coordinate(const textile_state *state, int32_t panel, int k, do
             rhs[local[(e + 1) % 3]] += t;
             rhs[local[e]] -= t;
         }
+    }
+    for (int32_t i = 0; i < system->segment_count; ++i) {
+        int32_t g = system->segment_ids[i];
+        const int32_t *ends = state->segment_ends + 2 * g;
+        int32_t a = state->vertex_local[ends[0]], b = state->vertex_local[ends[1]];
+        if (a == b)
+            continue;
+        double w = state->segment_weight[g], t = w * state->segment_target[2 * g + k];
+        values[system->segment_slots[i]] -= w;
+        values[colp[a + 1] - 1] += w;
+        values[colp[b + 1] - 1] += w;
+        rhs[b] += t;
+        rhs[a] -= t;
     }
     double reg = state->regularization;
     for (int32_t l = 0; l < n; ++l) {
@@ -995,8 +1247,9 @@ static void blend(const textile_state *state, const step_control *control, doubl
  * panels when none did alone, since seams couple them) take half their step,
  * and so on MAX_STEP_HALVINGS times, after which the previous iterate is
  * restored. Returns the energy of the iterate left in uv (evaluated, so the
- * local-step terms belong to it); *damped is set when the step was shortened,
- * *stalled when it was given up.
+ * local-step terms belong to it, except after a stall, which ends the
+ * iteration); *damped is set when the step was shortened, *stalled when it
+ * was given up.
  */
 static double line_search(textile_state *state, step_control *control, double energy, double tolerance, double *uv,
                           int *damped, int *stalled)
@@ -1025,9 +1278,9 @@ static double line_search(textile_state *state, step_control *control, double en
         int converged = halving == 0 && !new_flips && isfinite(trial) && trial - energy <= tolerance * energy;
         *damped = !converged;
         if (converged || halving == MAX_STEP_HALVINGS) {
-            memcpy(uv, control->previous_uv, bytes);
+            memcpy(uv, control->previous_uv, bytes); /* aligned already; the iteration stops */
             *stalled = 1;
-            return evaluate(state, uv);
+            return energy;
         }
         int blamed = 0;
         for (int32_t p = 0; p < np; ++p) {
@@ -1071,7 +1324,8 @@ static void read_options(textile_state *state, const pz_textile_options *options
     double up[3] = {0, 0, 1};
     memcpy(state->grain, options->grain_given ? options->grain : up, sizeof state->grain);
     state->threads = options->threads > 0 ? options->threads : omp_get_max_threads();
-    state->parallel = state->threads > 1 && state->pattern->mesh->face_count >= PARALLEL_MIN_FACES;
+    state->parallel = state->threads > 1 && state->pattern->mesh->face_count >=
+                                                (options->threads > 0 ? PARALLEL_MIN_FACES_ASKED : PARALLEL_MIN_FACES);
     /* A parallel loop over one panel leaves every thread but one spinning at
      * the barrier (on a busy machine, descheduled: 5x slower iterations were
      * measured), so one-panel patterns split the work inside the panel. */
@@ -1079,6 +1333,7 @@ static void read_options(textile_state *state, const pz_textile_options *options
     state->within_panel = state->parallel && state->pattern->panel_count == 1;
     state->pose_total = 1 + (options->use_poses ? state->pattern->mesh->pose_count : 0);
     state->regularization = 1e-8 * fmax(1.0, state->w_stretch + state->w_rigid);
+    state->mirror_tolerance = options->seam_mirror_tolerance > 0 ? options->seam_mirror_tolerance : 0.05;
 }
 
 pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *options, double *uv,
@@ -1105,7 +1360,7 @@ pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *
     if (!status)
         status = pz_param_panel_faces(pattern, &state.offsets, &state.order, ctx);
     if (!status)
-        status = state_setup(&state, ctx);
+        status = state_setup(&state, uv, &outcome.length_only_seams, ctx);
     if (status) {
         state_free(&state);
         return status;

@@ -36,7 +36,10 @@
  *    patch is warped, a node whose host's other nodes are all known is
  *    locked by Eq. 9. Several unknown nodes of one interior host inside the
  *    same patch (a dangling curve's slit) get a compatibility row instead.
- * Key feature curves lock their nodes' angles by Eq. 1. The iteration starts
+ * Key feature curves lock their nodes' angles by Eq. 1, or by the user's
+ * turning angles (pz_feature_curve.turning: pi -+ turn on the left/right
+ * side, the paper's "users can specify the shape ... by assigning theta").
+ * The iteration starts
  * from alpha shifted to satisfy each patch's turning constraint (see
  * start_on_turning) rather than the paper's theta = alpha.
  *
@@ -52,7 +55,10 @@
  * factorization fails. Injectivity is measured with pz_metrics_compute; when
  * the cotangent solve flips faces, the 1/length weights (positive, so every
  * interior vertex is a convex combination of its neighbours) are tried and
- * kept if they flip fewer. Each piece is finally turned so that the grain
+ * kept if they flip fewer; faces still flipped are untangled by moving
+ * interior vertices into the kernel of their star (pz_param_untangle), and
+ * a dangling curve whose tip still folds gives up tip edges, flagged best
+ * effort (trim_dangling_ends). Each piece is finally turned so that the grain
  * (default +z) runs along +v, and the pieces are laid side by side.
  *
  * Memory O(V + F). Time: O(F log F) to build the wires (sorting edges,
@@ -72,6 +78,8 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
 
 /* From lscm.c: faces grouped by panel, and the side-by-side layout of pieces. */
 pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
@@ -152,6 +160,8 @@ typedef struct ww_wires {
     ww_edge_key *keys;
     uint8_t *wire_edge;          /* per edge: on a boundary or a feature curve */
     uint8_t *key_vertex;         /* per pattern vertex: on a key curve */
+    double *key_turn;            /* per pattern vertex: the user's turning angle there, NAN when not given */
+    int32_t *key_side;           /* per pattern vertex: the curve's previous and next vertex (x2), for key_turn */
     int32_t patch_count;
     int32_t *patch_panel;
     int32_t *patch_offsets;      /* nodes of patch p: patch_offsets[p] .. [p+1]-1, anticlockwise */
@@ -171,6 +181,8 @@ static void wires_free(ww_wires *w)
     free(w->keys);
     free(w->wire_edge);
     free(w->key_vertex);
+    free(w->key_turn);
+    free(w->key_side);
     free(w->patch_panel);
     free(w->patch_offsets);
     free(w->patch_perimeter);
@@ -204,6 +216,11 @@ static pz_status mark_wires(const pz_pattern *pattern, const pz_feature_curves *
                                 c, v, nv);
             if (curve->kind == PZ_FEATURE_KEY)
                 w->key_vertex[v] = 1;
+            if (curve->kind == PZ_FEATURE_KEY && curve->turning && i > 0 && i + 1 < curve->vertex_count) {
+                w->key_turn[v] = curve->turning[i];
+                w->key_side[2 * v] = curve->vertices[i - 1];
+                w->key_side[2 * v + 1] = curve->vertices[i + 1];
+            }
             if (i == 0 || curve->vertices[i - 1] == v)
                 continue;
             int32_t e = find_edge(w->keys, t->edge_count, curve->vertices[i - 1], v);
@@ -314,14 +331,18 @@ static pz_status wires_build(const pz_pattern *pattern, const pz_feature_curves 
     w->keys = edge_keys(t);
     w->wire_edge = calloc((size_t)t->edge_count + 1, 1);
     w->key_vertex = calloc((size_t)pattern->mesh->vertex_count + 1, 1);
+    w->key_turn = malloc((size_t)pattern->mesh->vertex_count * sizeof(double) + 1);
+    w->key_side = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(int32_t) + 1);
     pz_mesh *split = NULL;
     pz_topology *split_topo = NULL;
     pz_loops *loops = NULL;
     int32_t *host = NULL, *face_patch = NULL, *vertex_face = NULL;
-    if (!cut || !w->keys || !w->wire_edge || !w->key_vertex) {
+    if (!cut || !w->keys || !w->wire_edge || !w->key_vertex || !w->key_turn || !w->key_side) {
         status = pz_error(ctx, PZ_ERR_NOMEM, "wirewarp: out of memory");
         goto done;
     }
+    for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v)
+        w->key_turn[v] = NAN;
     if ((status = mark_wires(pattern, features, w, cut, ctx)))
         goto done;
     if ((status = pz_mesh_cut(pattern->mesh, t, cut, &split, &host, ctx)))
@@ -620,7 +641,40 @@ done:
     return status;
 }
 
-/* Eq. 1: key-curve nodes keep their 3D angle, scaled to 2 pi at interior vertices. */
+/*
+ * A user-given 2D shape at interior host h (pz_feature_curve.turning): the
+ * node whose patch lies left of the curve (its loop, material on the left,
+ * runs prev -> h -> next) gets pi - turn, the one on the right pi + turn;
+ * they sum to 2 pi (Eq. 13). Returns 0 (Eq. 1 is used) unless h has exactly
+ * these two nodes.
+ */
+static int lock_given_turn(ww_angles *a, int32_t h)
+{
+    const ww_wires *w = a->w;
+    if (isnan(w->key_turn[h]) || w->topo->vertex_on_boundary[h] || w->host_offsets[h + 1] - w->host_offsets[h] != 2)
+        return 0;
+    double theta[2];
+    for (int j = 0; j < 2; ++j) {
+        int32_t q = w->host_nodes[w->host_offsets[h] + j], p = w->node_patch[q];
+        int32_t first = w->patch_offsets[p], n = w->patch_offsets[p + 1] - first, b = q - first;
+        int32_t before = w->node_host[first + (b + n - 1) % n], after = w->node_host[first + (b + 1) % n];
+        if (before == w->key_side[2 * h] && after == w->key_side[2 * h + 1])
+            theta[j] = WW_PI - w->key_turn[h];
+        else if (before == w->key_side[2 * h + 1] && after == w->key_side[2 * h])
+            theta[j] = WW_PI + w->key_turn[h];
+        else
+            return 0;
+    }
+    for (int j = 0; j < 2; ++j) {
+        int32_t q = w->host_nodes[w->host_offsets[h] + j];
+        a->theta[q] = theta[j];
+        a->locked[q] = 1;
+    }
+    return 1;
+}
+
+/* Key-curve nodes: the user's turning angles where given, else Eq. 1 (the 3D
+ * angle, scaled to 2 pi at interior vertices). */
 static int32_t lock_key_angles(ww_angles *a)
 {
     const ww_wires *w = a->w;
@@ -628,6 +682,10 @@ static int32_t lock_key_angles(ww_angles *a)
     for (int32_t h = 0; h < w->topo->vertex_count; ++h) {
         if (!w->key_vertex[h] || w->host_offsets[h] == w->host_offsets[h + 1])
             continue;
+        if (lock_given_turn(a, h)) {
+            count += 2;
+            continue;
+        }
         double sum = 0;
         for (int32_t j = w->host_offsets[h]; j < w->host_offsets[h + 1]; ++j)
             sum += w->alpha[w->host_nodes[j]];
@@ -1257,11 +1315,156 @@ static pz_status retry_inverse_length(const pz_pattern *pattern, const ww_wires 
     return status;
 }
 
-pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options *options,
-                            const pz_feature_curves *features, double *uv, pz_wirewarp_result *result, pz_ctx *ctx)
+/* ------------------------------------------------------------------------ */
+/* Untangling the interior                                                   */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Why faces flip even with the positive 1/length weights: Tutte's guarantee
+ * needs a convex boundary, and a dangling feature curve's tip is a reflex
+ * corner of its wire-patch (inner angle 2 pi). On a positively curved panel
+ * the wires keep their 3D lengths, the interior is compressed, and the
+ * vertex that continues the curve past the tip is pulled back across it
+ * (quarter-sphere, meridian from the pole to latitude 45: the 2 faces
+ * between the tip and that vertex). The repair moves only interior (non-wire)
+ * vertices, so E_len is untouched: a vertex of a flipped face goes to the
+ * centroid of the kernel of its star (the points from which every one of its
+ * faces is counter-clockwise), which unflips all its faces without flipping
+ * any other. Rounds repeat while they help; a vertex whose kernel is empty
+ * waits for its neighbours to move.
+ */
+#define UNTANGLE_ROUNDS 50
+#define KERNEL_MAX 64      /* polygon vertices kept while clipping; a star has a handful of faces */
+
+static double face_det(const pz_mesh *mesh, const double *uv, int32_t f)
 {
-    pz_wirewarp_result local;
-    pz_wirewarp_result *r = result ? result : &local;
+    const int32_t *c = mesh->faces + 3 * f;
+    const double *a = uv + 2 * c[0], *b = uv + 2 * c[1], *d = uv + 2 * c[2];
+    return (b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1]);
+}
+
+/* Clips the convex polygon poly (n points) to the half-plane left of a -> b; returns the new count. */
+static int clip_left(double (*poly)[2], int n, const double *a, const double *b)
+{
+    double out[KERNEL_MAX][2];
+    int m = 0;
+    for (int i = 0; i < n; ++i) {
+        const double *p = poly[i], *q = poly[(i + 1) % n];
+        double sp = (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]);
+        double sq = (b[0] - a[0]) * (q[1] - a[1]) - (b[1] - a[1]) * (q[0] - a[0]);
+        if (sp >= 0 && m < KERNEL_MAX) {
+            out[m][0] = p[0];
+            out[m++][1] = p[1];
+        }
+        if ((sp >= 0) != (sq >= 0) && m < KERNEL_MAX) {
+            double t = sp / (sp - sq);
+            out[m][0] = p[0] + t * (q[0] - p[0]);
+            out[m++][1] = p[1] + t * (q[1] - p[1]);
+        }
+    }
+    memcpy(poly, out, (size_t)m * sizeof out[0]);
+    return m;
+}
+
+/* Moves v to the centroid of its star's kernel; 0 when the kernel is empty. */
+static int move_into_kernel(const pz_mesh *mesh, const int32_t *star, int32_t count, int32_t v, double *uv)
+{
+    double poly[KERNEL_MAX][2], lo[2] = {HUGE_VAL, HUGE_VAL}, hi[2] = {-HUGE_VAL, -HUGE_VAL};
+    for (int32_t i = 0; i < count; ++i)
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 2; ++d) {
+                lo[d] = fmin(lo[d], uv[2 * mesh->faces[3 * star[i] + k] + d]);
+                hi[d] = fmax(hi[d], uv[2 * mesh->faces[3 * star[i] + k] + d]);
+            }
+    double box[4][2] = {{lo[0], lo[1]}, {hi[0], lo[1]}, {hi[0], hi[1]}, {lo[0], hi[1]}};
+    memcpy(poly, box, sizeof box);
+    int n = 4;
+    for (int32_t i = 0; i < count && n >= 3; ++i) {
+        const int32_t *c = mesh->faces + 3 * star[i];
+        int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+        n = clip_left(poly, n, uv + 2 * c[(k + 1) % 3], uv + 2 * c[(k + 2) % 3]);
+    }
+    double twice = 0, cx = 0, cy = 0;
+    for (int i = 0; i < n; ++i) {
+        const double *p = poly[i], *q = poly[(i + 1) % n];
+        double cross = p[0] * q[1] - q[0] * p[1];
+        twice += cross;
+        cx += (p[0] + q[0]) * cross;
+        cy += (p[1] + q[1]) * cross;
+    }
+    if (n < 3 || !(twice > 1e-12 * (hi[0] - lo[0]) * (hi[1] - lo[1])))
+        return 0;
+    double old[2] = {uv[2 * v], uv[2 * v + 1]};
+    uv[2 * v] = cx / (3 * twice);
+    uv[2 * v + 1] = cy / (3 * twice);
+    for (int32_t i = 0; i < count; ++i)
+        if (!(face_det(mesh, uv, star[i]) > 0)) { /* round-off at a sliver kernel: keep the old place */
+            uv[2 * v] = old[0];
+            uv[2 * v + 1] = old[1];
+            return 0;
+        }
+    return 1;
+}
+
+/* Unflips faces by moving their vertices that are not `fixed` (NULL: none is; see above); returns the
+ * vertex moves or -1 (no memory). Also used by springmass.c. */
+int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv)
+{
+    int32_t nv = mesh->vertex_count, nf = mesh->face_count, moves = 0;
+    int32_t *offsets = calloc((size_t)nv + 2, sizeof(int32_t)), *star = malloc((size_t)nf * 3 * sizeof(int32_t) + 1);
+    uint8_t *wanted = malloc((size_t)nv + 1);
+    if (!offsets || !star || !wanted) {
+        free(offsets);
+        free(star);
+        free(wanted);
+        return -1;
+    }
+    for (int32_t c = 0; c < 3 * nf; ++c)
+        ++offsets[mesh->faces[c] + 2];
+    for (int32_t v = 0; v < nv; ++v)
+        offsets[v + 2] += offsets[v + 1];
+    for (int32_t c = 0; c < 3 * nf; ++c)
+        star[offsets[mesh->faces[c] + 1]++] = c / 3;
+    /* offsets[v] .. offsets[v + 1] are now v's faces */
+    for (int round = 0; round < UNTANGLE_ROUNDS; ++round) {
+        memset(wanted, 0, (size_t)nv);
+        int32_t flipped = 0, moved = 0;
+        for (int32_t f = 0; f < nf; ++f)
+            if (!(face_det(mesh, uv, f) > 0)) {
+                ++flipped;
+                for (int k = 0; k < 3; ++k)
+                    wanted[mesh->faces[3 * f + k]] = !fixed || !fixed[mesh->faces[3 * f + k]];
+            }
+        for (int32_t v = 0; v < nv; ++v)
+            if (wanted[v])
+                moved += move_into_kernel(mesh, star + offsets[v], offsets[v + 1] - offsets[v], v, uv);
+        moves += moved;
+        if (!flipped || !moved)
+            break;
+    }
+    free(offsets);
+    free(star);
+    free(wanted);
+    return moves;
+}
+
+/* The untangling step of pz_param_wirewarp: repair, then measure again. */
+static pz_status untangle(const pz_pattern *pattern, const uint8_t *placed, double *uv, pz_wirewarp_result *r,
+                          pz_ctx *ctx)
+{
+    int32_t moves = pz_param_untangle(pattern->mesh, placed, uv);
+    if (moves < 0)
+        return pz_error(ctx, PZ_ERR_NOMEM, "wirewarp: out of memory while untangling");
+    r->untangled_vertices = moves;
+    pz_status status = moves ? measure_injectivity(pattern, uv, r, ctx) : PZ_OK;
+    if (!status && r->flipped_triangles > 0)
+        r->best_effort = 1; /* folded: no injective layout of the interior was found with these wires */
+    return status;
+}
+
+static pz_status wirewarp_once(const pz_pattern *pattern, const pz_wirewarp_options *options,
+                               const pz_feature_curves *features, double *uv, pz_wirewarp_result *r, pz_ctx *ctx)
+{
     memset(r, 0, sizeof *r);
     pz_status status = check_pattern(pattern, uv, ctx);
     if (status)
@@ -1304,12 +1507,141 @@ pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options
         goto done;
     if (!r->injective && !r->interior_inverse_length)
         status = retry_inverse_length(pattern, &w, placed, uv, r, ctx);
+    if (!status && r->flipped_triangles > 0)
+        status = untangle(pattern, placed, uv, r, ctx);
 done:
     free(offsets);
     free(order);
     free(theta);
     free(placed);
     wires_free(&w);
+    return status;
+}
+
+/*
+ * Graceful degradation for dangling curves. When faces stay flipped next to
+ * the free end (tip) of a feature curve that stops inside its panel, the
+ * interior cannot follow the rigid wire there (see pz_param_untangle): the
+ * tip's last edge is given up (the vertex becomes interior again) and the
+ * panel warped again, until no face flips or no tip near a flip is left.
+ * The shortened curves still keep their lengths exactly; the dropped edges
+ * are counted in result->trimmed_feature_edges and best_effort is set.
+ */
+#define TRIM_ROUNDS 200
+
+/* Marks the vertices of flipped faces and of the faces touching them. */
+static void mark_near_flips(const pz_mesh *mesh, const double *uv, uint8_t *near)
+{
+    memset(near, 0, (size_t)mesh->vertex_count);
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        if (!(face_det(mesh, uv, f) > 0))
+            for (int k = 0; k < 3; ++k)
+                near[mesh->faces[3 * f + k]] = 1;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const int32_t *c = mesh->faces + 3 * f;
+        if ((near[c[0]] | near[c[1]] | near[c[2]]) & 1)
+            near[c[0]] |= 2, near[c[1]] |= 2, near[c[2]] |= 2;
+    }
+}
+
+/* Drops the dangling ends of `curves` that lie near a flip; returns the edges dropped. */
+static int32_t trim_dangling_ends(const pz_mesh *mesh, const uint8_t *on_boundary, const uint8_t *near,
+                                  int32_t *uses, pz_feature_curves *curves)
+{
+    int32_t dropped = 0;
+    memset(uses, 0, (size_t)mesh->vertex_count * sizeof(int32_t));
+    for (int32_t c = 0; c < curves->curve_count; ++c)
+        for (int32_t i = 0; i < curves->curves[c].vertex_count; ++i)
+            ++uses[curves->curves[c].vertices[i]];
+    for (int32_t c = 0; c < curves->curve_count; ++c) {
+        pz_feature_curve *curve = &curves->curves[c];
+        for (int end = 0; end < 2 && curve->vertex_count >= 2; ++end) {
+            int32_t at = end ? curve->vertex_count - 1 : 0, tip = curve->vertices[at];
+            if (on_boundary[tip] || uses[tip] != 1 || !near[tip])
+                continue;
+            if (end == 0) {
+                memmove(curve->vertices, curve->vertices + 1, (size_t)(curve->vertex_count - 1) * sizeof(int32_t));
+                if (curve->turning)
+                    memmove(curve->turning, curve->turning + 1, (size_t)(curve->vertex_count - 1) * sizeof(double));
+            }
+            --curve->vertex_count;
+            ++dropped;
+        }
+    }
+    int32_t kept = 0;
+    for (int32_t c = 0; c < curves->curve_count; ++c) {
+        if (curves->curves[c].vertex_count >= 2) {
+            curves->curves[kept++] = curves->curves[c];
+        } else {
+            free(curves->curves[c].vertices);
+            free(curves->curves[c].turning);
+        }
+    }
+    curves->curve_count = kept;
+    return dropped;
+}
+
+static pz_feature_curves *copy_curves(const pz_feature_curves *from)
+{
+    pz_feature_curves *to = calloc(1, sizeof *to);
+    if (!to || !(to->curves = calloc((size_t)from->curve_count + 1, sizeof *to->curves))) {
+        free(to);
+        return NULL;
+    }
+    for (int32_t c = 0; c < from->curve_count; ++c, ++to->curve_count) {
+        const pz_feature_curve *src = &from->curves[c];
+        pz_feature_curve *dst = &to->curves[c];
+        *dst = *src;
+        dst->vertices = malloc((size_t)src->vertex_count * sizeof(int32_t) + 1);
+        dst->turning = src->turning ? malloc((size_t)src->vertex_count * sizeof(double) + 1) : NULL;
+        if (!dst->vertices || (src->turning && !dst->turning)) {
+            ++to->curve_count; /* so that this curve's arrays are freed too */
+            pz_feature_curves_free(&to);
+            return NULL;
+        }
+        memcpy(dst->vertices, src->vertices, (size_t)src->vertex_count * sizeof(int32_t));
+        if (src->turning)
+            memcpy(dst->turning, src->turning, (size_t)src->vertex_count * sizeof(double));
+    }
+    return to;
+}
+
+pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options *options,
+                            const pz_feature_curves *features, double *uv, pz_wirewarp_result *result, pz_ctx *ctx)
+{
+    pz_wirewarp_result local;
+    pz_wirewarp_result *r = result ? result : &local;
+    pz_status status = wirewarp_once(pattern, options, features, uv, r, ctx);
+    if (status || r->flipped_triangles == 0 || !features || features->curve_count == 0)
+        return status;
+    const pz_mesh *mesh = pattern->mesh;
+    pz_topology *topology = NULL;
+    pz_feature_curves *trimmed = copy_curves(features);
+    uint8_t *near = malloc((size_t)mesh->vertex_count + 1);
+    int32_t *uses = malloc((size_t)mesh->vertex_count * sizeof(int32_t) + 1);
+    if (!trimmed || !near || !uses) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "wirewarp: out of memory");
+        goto done;
+    }
+    if ((status = pz_topology_build(mesh, &topology, ctx)))
+        goto done;
+    int32_t total = 0;
+    for (int round = 0; round < TRIM_ROUNDS && r->flipped_triangles > 0; ++round) {
+        mark_near_flips(mesh, uv, near);
+        int32_t dropped = trim_dangling_ends(mesh, topology->vertex_on_boundary, near, uses, trimmed);
+        if (!dropped)
+            break;
+        total += dropped;
+        if ((status = wirewarp_once(pattern, options, trimmed, uv, r, ctx)))
+            goto done;
+    }
+    r->trimmed_feature_edges = total;
+    r->best_effort |= total > 0;
+done:
+    pz_topology_free(&topology);
+    pz_feature_curves_free(&trimmed);
+    free(near);
+    free(uses);
     return status;
 }
 
@@ -1321,8 +1653,10 @@ void pz_feature_curves_free(pz_feature_curves **curves)
 {
     if (!curves || !*curves)
         return;
-    for (int32_t c = 0; c < (*curves)->curve_count; ++c)
+    for (int32_t c = 0; c < (*curves)->curve_count; ++c) {
         free((*curves)->curves[c].vertices);
+        free((*curves)->curves[c].turning);
+    }
     free((*curves)->curves);
     free(*curves);
     *curves = NULL;

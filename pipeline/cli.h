@@ -77,6 +77,11 @@ static inline int pz_cli_value_index(uint64_t flag)
     return bit - PZ_CLI_VALUE_FIRST_BIT;
 }
 
+/** The pattern-file options of `flatten` and `run` (export/export.h). */
+#define PZ_CLI_OPT_EXPORT                                                                                   \
+    (PZ_CLI_OPT_SEAM_ALLOWANCE | PZ_CLI_OPT_HEM_ALLOWANCE | PZ_CLI_OPT_ALLOWANCES | PZ_CLI_OPT_NOTCH_SPACING | \
+     PZ_CLI_OPT_PAPER | PZ_CLI_OPT_FABRIC_WIDTH | PZ_CLI_OPT_GAP | PZ_CLI_OPT_DXF_STRICT)
+
 /** Options every command takes. */
 #define PZ_CLI_OPT_COMMON (PZ_CLI_OPT_QUIET | PZ_CLI_OPT_JSON)
 
@@ -125,6 +130,8 @@ pz_status pz_cli_generate(const pz_cli_args *args, pz_ctx *ctx);
 pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_flatten.c */
 pz_status pz_cli_field(const pz_cli_args *args, pz_ctx *ctx);     /* cmd_field.c */
 pz_status pz_cli_prepare(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_prepare.c */
+pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx);       /* cmd_run.c */
+extern const char pz_cli_run_usage[];
 extern const char pz_cli_prepare_usage[];
 extern const char pz_cli_flatten_usage[];
 extern const char pz_cli_field_usage[];

@@ -123,6 +123,8 @@ typedef struct flatten_settings {
     pz_fabric fabric;
     int grain_given;
     double grain[3];
+    pz_export_options export_options; /* --seam-allowance ... --gap */
+    const char *allowances_path;      /* --allowances FILE, or NULL */
 } flatten_settings;
 
 /* Exactly `count` comma-separated finite numbers. */
@@ -169,6 +171,50 @@ static pz_status parse_backend_options(const pz_cli_args *args, flatten_settings
         settings->features_path = text;
     }
     return PZ_OK;
+}
+
+/* One finite number >= minimum for a length option (mm). */
+static pz_status parse_length(const char *option, const char *text, double minimum, double *out, pz_ctx *ctx)
+{
+    pz_status status = parse_numbers(option, text, out, 1, ctx);
+    if (status == PZ_OK && *out < minimum)
+        status = pz_error(ctx, PZ_ERR_USAGE, "flatten: %s: %s is below %g mm", option, text, minimum);
+    return status;
+}
+
+/* The pattern-file options of the export stage (export/export.h). */
+static pz_status parse_export_options(const pz_cli_args *args, flatten_settings *settings, pz_ctx *ctx)
+{
+    pz_export_options *options = &settings->export_options;
+    pz_export_options_default(options);
+    const char *text;
+    pz_status status = PZ_OK;
+    int hem_given = 0;
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_SEAM_ALLOWANCE)))
+        status = parse_length("--seam-allowance", text, 0, &options->seam_allowance_mm, ctx);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_HEM_ALLOWANCE)))
+        status = parse_length("--hem-allowance", text, 0, &options->hem_allowance_mm, ctx), hem_given = 1;
+    if (!hem_given)
+        options->hem_allowance_mm = options->seam_allowance_mm;
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_NOTCH_SPACING)))
+        status = parse_length("--notch-spacing", text, 1, &options->notch_spacing_mm, ctx);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_FABRIC_WIDTH)))
+        status = parse_length("--fabric-width", text, 10, &options->fabric_width_mm, ctx);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_GAP)))
+        status = parse_length("--gap", text, 0, &options->gap_mm, ctx);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_PAPER))) {
+        if (strcmp(text, "a4") != 0 && strcmp(text, "letter") != 0 && strcmp(text, "A4") != 0 &&
+            strcmp(text, "Letter") != 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "%s: --paper: '%s' is not a4 or letter", args->command, text);
+        options->paper = (text[0] == 'a' || text[0] == 'A') ? "a4" : "letter";
+    }
+    options->dxf_strict = pz_cli_value(args, PZ_CLI_OPT_DXF_STRICT) != NULL;
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_ALLOWANCES))) {
+        if (!*text)
+            return pz_error(ctx, PZ_ERR_USAGE, "%s: --allowances: empty file name", args->command);
+        settings->allowances_path = text;
+    }
+    return status;
 }
 
 static pz_status parse_settings(const pz_cli_args *args, flatten_settings *settings, pz_ctx *ctx)
@@ -225,10 +271,14 @@ static pz_status parse_settings(const pz_cli_args *args, flatten_settings *setti
             return pz_error(ctx, PZ_ERR_USAGE, "flatten: --grain: '%s' is the zero vector", text);
         settings->grain_given = 1;
     }
+    if ((status = parse_export_options(args, settings, ctx)))
+        return status;
     if (!args->output_path)
-        return pz_error(ctx, PZ_ERR_USAGE, "flatten: -o DIR is required (see panelize flatten --help)");
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: -o DIR is required (see panelize %s --help)", args->command,
+                        args->command);
     if (args->positional_count < 1)
-        return pz_error(ctx, PZ_ERR_USAGE, "flatten: expected MESH (see panelize flatten --help)");
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: expected MESH (see panelize %s --help)", args->command,
+                        args->command);
     if (args->positional_count > 1 && args->pose_path_count > 0)
         return pz_error(ctx, PZ_ERR_USAGE, "flatten: --pose works with one MESH, not %d panel files",
                         args->positional_count);
@@ -385,7 +435,8 @@ static pz_status map_raw_ids(garment_input *input, int32_t *kept, pz_ctx *ctx)
     return PZ_OK;
 }
 
-static pz_status load_garment(const pz_cli_args *args, garment_input *input, pz_ctx *ctx)
+static pz_status load_garment(const pz_cli_args *args, const pz_flatten_extension *extension,
+                              garment_input *input, pz_ctx *ctx)
 {
     pz_status status = read_raw(args, input, ctx);
     int32_t kept = 0;
@@ -394,11 +445,15 @@ static pz_status load_garment(const pz_cli_args *args, garment_input *input, pz_
     if (status != PZ_OK)
         return status;
     pz_cli_mesh_to_mm(args, input->mesh, &input->units, NULL);
+    int prepared = 0;
+    if (extension && extension->prepare_mesh &&
+        (status = extension->prepare_mesh(extension->user, &input->mesh, &prepared, ctx)) != PZ_OK)
+        return status;
     status = pz_cli_prepare_quietly_first(&input->mesh, args->positionals[0], args->repair_flags, ctx);
     if (status != PZ_OK)
         return status;
     pz_mesh *mesh = input->mesh;
-    input->ids_preserved = mesh->face_count == input->raw_face_count && mesh->vertex_count == kept;
+    input->ids_preserved = !prepared && mesh->face_count == input->raw_face_count && mesh->vertex_count == kept;
     input->output_positions = malloc(((size_t)mesh->vertex_count + 1) * 3 * sizeof(double));
     if (!input->output_positions)
         return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
@@ -536,11 +591,16 @@ static pz_status panels_from_files(const pz_mesh *mesh, panel_choice *choice, pz
     return PZ_OK;
 }
 
-static pz_status choose_panels(const pz_cli_args *args, const garment_input *input, panel_choice *choice,
-                               pz_ctx *ctx)
+static pz_status choose_panels(const pz_cli_args *args, const pz_flatten_extension *extension,
+                               const garment_input *input, panel_choice *choice, pz_ctx *ctx)
 {
     const pz_mesh *mesh = input->mesh;
     const char *panels = pz_cli_value(args, PZ_CLI_OPT_PANELS);
+    if (!panels && extension && extension->choose_panels) {
+        choice->source = extension->panels_source ? extension->panels_source : "extension";
+        return extension->choose_panels(extension->user, mesh, &choice->face_panel, &choice->panel_count,
+                                        &choice->extra_cuts, ctx);
+    }
     if (panels && strcmp(panels, "uv") == 0) {
         if (!mesh->uvs || !mesh->corner_uvs)
             return pz_error(ctx, PZ_ERR_DATA, "%s: --panels uv: the mesh has no UVs (vt)", args->positionals[0]);
@@ -770,68 +830,152 @@ static char *join_path(const char *dir, const char *name)
     return path;
 }
 
-enum output_file { OUT_OBJ, OUT_SVG, OUT_REPORT, OUT_COUNT };
-static const char *const output_names[OUT_COUNT] = {"garment.obj", "pattern.svg", "report.json"};
+/*
+ * The files of one run, in writing order: garment.obj, the old pattern.svg
+ * (only while the export table has no pattern.svg of its own), every file
+ * of the export table but report.html, the command's extra files
+ * (layout.obj), report.json (built then, so it can carry the write timing of
+ * the files before it), report.html (which shows report.json).
+ */
+enum output_kind { OUT_OBJ, OUT_OLD_SVG, OUT_EXPORT, OUT_EXTRA, OUT_REPORT, OUT_HTML };
+
+typedef struct output_entry {
+    const char *name;
+    enum output_kind kind;
+    int index;                /* OUT_EXPORT / OUT_HTML: pz_export_files index; OUT_EXTRA: extension index */
+    int binary;
+} output_entry;
+
+#define MAX_OUTPUTS 32
 
 /* Everything the write step needs. */
 typedef struct flatten_run {
     const pz_cli_args *args;
+    const pz_flatten_extension *extension;
     const garment_input *input;
     const panel_choice *panels;
     const pz_pattern *pattern;
     double *uv;
     const pz_springmass_result *springmass;  /* energy.svg is written when set */
     pz_flatten_report report;
+    pz_export_inputs export_inputs;
+    const pz_marker *marker;
     double start, write_start;
+    cJSON *report_root;       /* built just before report.json is written */
     char *report_text;        /* report.json, for --json too */
+    output_entry outputs[MAX_OUTPUTS];
+    int output_count;
 } flatten_run;
 
-static pz_status write_file(flatten_run *run, enum output_file which, FILE *file, pz_ctx *ctx)
+static int export_table_has(const char *name)
 {
-    switch (which) {
+    for (int i = 0; i < pz_export_file_count; ++i)
+        if (strcmp(pz_export_files[i].name, name) == 0)
+            return 1;
+    return 0;
+}
+
+static void add_output(flatten_run *run, const char *name, enum output_kind kind, int index, int binary)
+{
+    if (run->output_count < MAX_OUTPUTS)
+        run->outputs[run->output_count++] = (output_entry){name, kind, index, binary};
+}
+
+static void list_outputs(flatten_run *run)
+{
+    run->output_count = 0;
+    add_output(run, "garment.obj", OUT_OBJ, 0, 1);
+    if (!export_table_has("pattern.svg"))
+        add_output(run, "pattern.svg", OUT_OLD_SVG, 0, 1);
+    for (int i = 0; i < pz_export_file_count; ++i)
+        if (strcmp(pz_export_files[i].name, "report.html") != 0 &&
+            (run->marker || strcmp(pz_export_files[i].name, "marker.svg") != 0))
+            add_output(run, pz_export_files[i].name, OUT_EXPORT, i, pz_export_files[i].binary);
+    const pz_flatten_extension *extension = run->extension;
+    for (int i = 0; extension && i < extension->extra_file_count; ++i)
+        add_output(run, extension->extra_files[i].name, OUT_EXTRA, i, 1);
+    add_output(run, "report.json", OUT_REPORT, 0, 1);
+    for (int i = 0; i < pz_export_file_count; ++i)
+        if (strcmp(pz_export_files[i].name, "report.html") == 0)
+            add_output(run, pz_export_files[i].name, OUT_HTML, i, 1);
+}
+
+/* report.json's content, with the marker and the command's own keys. */
+static pz_status build_report(flatten_run *run, pz_ctx *ctx)
+{
+    double now = pz_seconds();
+    run->report.timings_ms[TIME_WRITE] = pz_cli_elapsed_ms(run->write_start, now);
+    run->report.timings_ms[TIME_TOTAL] = pz_cli_elapsed_ms(run->start, now);
+    cJSON *root = pz_flatten_report_json(&run->report);
+    int failed = !root;
+    if (root && run->marker) {
+        cJSON *marker = pz_marker_report_json(run->marker);
+        failed |= !marker || !cJSON_AddItemToObject(root, "marker", marker);
+    }
+    const pz_flatten_extension *extension = run->extension;
+    if (root && !failed && extension && extension->extend_report)
+        failed |= !extension->extend_report(extension->user, root, run->input->mesh, run->pattern,
+                                            run->report.metrics[0]);
+    run->report_text = root && !failed ? cJSON_Print(root) : NULL;
+    if (!run->report_text) {
+        cJSON_Delete(root);
+        return pz_error(ctx, PZ_ERR_NOMEM, "report.json: out of memory");
+    }
+    run->report_root = root;
+    run->export_inputs.report = root;
+    return PZ_OK;
+}
+
+static pz_status write_file(flatten_run *run, const output_entry *entry, FILE *file, pz_ctx *ctx)
+{
+    switch (entry->kind) {
     case OUT_OBJ:
         return pz_pattern_write_obj(file, run->input->mesh, run->input->output_positions, run->pattern, run->uv, ctx);
-    case OUT_SVG:
+    case OUT_OLD_SVG:
         return pz_pattern_write_svg(file, run->pattern, run->uv, (const char *const *)run->panels->names, ctx);
-    default: {
-        /* Written last, so the write timing covers the other two files. */
-        double now = pz_seconds();
-        run->report.timings_ms[TIME_WRITE] = pz_cli_elapsed_ms(run->write_start, now);
-        run->report.timings_ms[TIME_TOTAL] = pz_cli_elapsed_ms(run->start, now);
-        cJSON *root = pz_flatten_report_json(&run->report);
-        run->report_text = root ? cJSON_Print(root) : NULL;
-        cJSON_Delete(root);
-        if (!run->report_text)
-            return pz_error(ctx, PZ_ERR_NOMEM, "report.json: out of memory");
+    case OUT_EXPORT:
+    case OUT_HTML:
+        return pz_export_files[entry->index].write(file, &run->export_inputs, entry->name, ctx);
+    case OUT_EXTRA: {
+        const pz_flatten_extension *extension = run->extension;
+        return extension->extra_files[entry->index].write(extension->user, file, run->pattern, ctx);
+    }
+    case OUT_REPORT: {
+        pz_status status = build_report(run, ctx);
+        if (status != PZ_OK)
+            return status;
         fputs(run->report_text, file);
         fputc('\n', file);
         return PZ_OK;
     }
     }
+    return pz_error(ctx, PZ_ERR_INTERNAL, "%s: unknown output", entry->name);
 }
 
 /*
- * Writes the three files (four with energy.svg) all or nothing. energy.svg is
- * written by the library's own atomic writer once the other three are complete
- * in their temporaries, and removed again should a rename fail afterwards.
+ * Writes every file all or nothing. energy.svg is written by the library's
+ * own atomic writer once the others are complete in their temporaries, and
+ * removed again should a rename fail afterwards.
  */
 static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
 {
     const char *dir = run->args->output_path;
+    list_outputs(run);
+    int count = run->output_count;
     created_dirs dirs = {{0}, 0};
-    char *paths[OUT_COUNT] = {0};
+    char *paths[MAX_OUTPUTS] = {0};
     char *energy_path = NULL;
     int energy_written = 0;
-    pz_output outputs[OUT_COUNT];
+    pz_output outputs[MAX_OUTPUTS];
     memset(outputs, 0, sizeof outputs);
     int committed = 0;
     pz_status status = make_directories(dir, &dirs, ctx);
-    for (int i = 0; i < OUT_COUNT && status == PZ_OK; ++i)
-        if (!(paths[i] = join_path(dir, output_names[i])))
+    for (int i = 0; i < count && status == PZ_OK; ++i)
+        if (!(paths[i] = join_path(dir, run->outputs[i].name)))
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);
-    for (int i = 0; i < OUT_COUNT && status == PZ_OK; ++i)
+    for (int i = 0; i < count && status == PZ_OK; ++i)
         if ((status = pz_output_open(&outputs[i], paths[i], "wb", ctx)) == PZ_OK)
-            status = write_file(run, (enum output_file)i, outputs[i].file, ctx);
+            status = write_file(run, &run->outputs[i], outputs[i].file, ctx);
     if (status == PZ_OK && run->springmass) {
         if (!(energy_path = join_path(dir, "energy.svg")))
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);
@@ -839,12 +983,12 @@ static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
                  PZ_OK)
             energy_written = 1;
     }
-    for (; committed < OUT_COUNT && status == PZ_OK; ++committed)
+    for (; committed < count && status == PZ_OK; ++committed)
         if ((status = pz_output_commit(&outputs[committed], ctx)) != PZ_OK)
             break;
     if (status != PZ_OK) {
         /* Abort is a no-op on an output never opened or already committed (its fields are cleared). */
-        for (int i = 0; i < OUT_COUNT; ++i)
+        for (int i = 0; i < count; ++i)
             pz_output_abort(&outputs[i]);
         for (int i = 0; i < committed; ++i)
             remove(paths[i]);
@@ -854,7 +998,7 @@ static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
     }
     free(energy_path);
     forget_created_dirs(&dirs);
-    for (int i = 0; i < OUT_COUNT; ++i)
+    for (int i = 0; i < count; ++i)
         free(paths[i]);
     return status;
 }
@@ -883,15 +1027,50 @@ static pz_status print_result(const flatten_run *run, const pz_metrics *const *m
     printf("max |strain|:       %.6f%s\n", max_abs_strain, metrics_count > 1 ? " (worst pose)" : "");
     printf("injective:          %s\n", injective ? "yes" : "no");
     printf("max seam mismatch:  %.6f\n", rest->max_seam_mismatch_rel);
-    printf("wrote:              %s/{garment.obj,pattern.svg,report.json%s}\n", run->args->output_path,
-           run->springmass ? ",energy.svg" : "");
+    if (run->marker)
+        printf("marker:             %.1f mm long, efficiency %.1f%%\n", run->marker->length_mm,
+               100.0 * run->marker->efficiency);
+    if (run->extension && run->extension->print_summary)
+        run->extension->print_summary(run->extension->user);
+    printf("wrote:              %s/{", run->args->output_path);
+    for (int i = 0; i < run->output_count; ++i)
+        printf("%s%s", i ? "," : "", run->outputs[i].name);
+    printf("%s}\n", run->springmass ? ",energy.svg" : "");
     (void)ctx;
     return PZ_OK;
 }
 
 /* ---------------------------------------------------------------- the command */
 
+/* The pieces (and the marker) every export file is drawn from; nothing when the export table is empty. */
+static pz_status build_pieces(const flatten_settings *settings, const pz_flatten_extension *extension,
+                              const pz_pattern *pattern, const double *uv, const char *const *panel_names,
+                              double **seam_allowances, pz_pieces **pieces, pz_marker **marker, pz_ctx *ctx)
+{
+    if (pz_export_file_count == 0)
+        return PZ_OK;
+    pz_export_options options = settings->export_options;
+    pz_status status = PZ_OK;
+    if (settings->allowances_path) {
+        status = pz_export_read_allowances(settings->allowances_path, pattern, seam_allowances, ctx);
+        options.seam_allowances_mm = *seam_allowances;
+    }
+    const int32_t *panel_mirror = NULL;
+    if (status == PZ_OK && extension && extension->panel_mirror)
+        panel_mirror = extension->panel_mirror(extension->user, pattern);
+    if (status == PZ_OK)
+        status = pz_pieces_build(pattern, uv, &options, panel_mirror, panel_names, pieces, ctx);
+    if (status == PZ_OK)
+        status = pz_marker_build(*pieces, &options, marker, ctx);
+    return status;
+}
+
 pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
+{
+    return pz_flatten_execute(args, NULL, ctx);
+}
+
+pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension *extension, pz_ctx *ctx)
 {
     flatten_settings settings;
     pz_status status = parse_settings(args, &settings, ctx);
@@ -911,9 +1090,13 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
     const char *grain_source = "given";
     int metrics_count = 0, layout_moved = 0;
     pz_metrics **metrics = NULL;
+    double *seam_allowances = NULL;
+    pz_pieces *pieces = NULL;
+    pz_marker *marker = NULL;
     double *timings = run.report.timings_ms, mark = run.start, now;
+    run.extension = extension;
 
-    status = load_garment(args, &input, ctx);
+    status = load_garment(args, extension, &input, ctx);
     timings[TIME_READ] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
     if (status == PZ_OK && !settings.grain_given) {
         /* y-up (glTF, CLO3D, Blender) and z-up (scanners, CAD) garments both get the warp along their height. */
@@ -921,8 +1104,9 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
         grain_source = settings.grain[1] > 0.5 ? "vertical axis (y)" : "vertical axis (z)";
     }
     if (status == PZ_OK)
-        status = choose_panels(args, &input, &panels, ctx);
-    if (status == PZ_OK)
+        status = choose_panels(args, extension, &input, &panels, ctx);
+    /* run's --darts is on|off, not dart files; it takes no --seams. */
+    if (status == PZ_OK && !extension)
         status = read_correspondences(args, &input, panels.panel_count, &correspondences, ctx);
     if (status == PZ_OK)
         status = pz_pattern_build(input.mesh, panels.face_panel, panels.extra_cuts, &correspondences,
@@ -943,13 +1127,39 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
     if (status == PZ_OK)
         status = measure(pattern, uv, &settings.fabric, metrics, metrics_count, ctx);
     timings[TIME_METRICS] = pz_cli_elapsed_ms(mark, now = pz_seconds());
+    /* Names belong to the panels as chosen; should the pattern number them otherwise, show none. */
+    if (status == PZ_OK && pattern->panel_count != panels.panel_count)
+        panel_choice_drop_names(&panels);
+    run.write_start = pz_seconds();
+    /* The pieces carry the garment's name: the input's base name, unless a size name says otherwise. */
+    char *garment_name = duplicate_base_name(args->positionals[0]);
+    if (garment_name && !settings.export_options.garment_name)
+        settings.export_options.garment_name = garment_name;
+    if (status == PZ_OK)
+        status = build_pieces(&settings, extension, pattern, uv, (const char *const *)panels.names,
+                              &seam_allowances, &pieces, &marker, ctx);
+    if (status == PZ_OK) {
+        pz_export_inputs *inputs = &run.export_inputs;
+        inputs->garment = input.mesh;
+        inputs->positions = input.output_positions;
+        inputs->pattern = pattern;
+        inputs->uv = uv;
+        inputs->metrics = metrics[0];
+        inputs->pieces = pieces;
+        inputs->marker = marker;
+        inputs->options = &settings.export_options;
+        inputs->panel_names = (const char *const *)panels.names;
+        if (extension && extension->layout_curves)
+            extension->layout_curves(extension->user, pattern, &inputs->layout_vertices, &inputs->layout_offsets,
+                                     &inputs->layout_curve_count);
+        run.marker = marker;
+    }
     if (status == PZ_OK) {
         run.input = &input;
         run.panels = &panels;
         run.pattern = pattern;
         run.uv = uv;
         run.springmass = settings.backend == BACKEND_SPRINGMASS ? &outcome.springmass : NULL;
-        run.write_start = pz_seconds();
         pz_flatten_report *report = &run.report;
         report->input_paths = args->positionals;
         report->input_count = args->positional_count;
@@ -978,9 +1188,6 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
         report->pattern = pattern;
         report->metrics = (const pz_metrics *const *)metrics;
         report->metrics_count = metrics_count;
-        /* Names belong to the panels as chosen; should the pattern number them otherwise, show none. */
-        if (pattern->panel_count != panels.panel_count)
-            panel_choice_drop_names(&panels);
         report->panel_names = (const char *const *)panels.names;
         status = write_outputs(&run, ctx);
     }
@@ -993,6 +1200,11 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
         status = print_result(&run, (const pz_metrics *const *)metrics, metrics_count, ctx);
     }
     free(run.report_text);
+    cJSON_Delete(run.report_root);
+    pz_marker_free(&marker);
+    pz_pieces_free(&pieces);
+    free(garment_name);
+    free(seam_allowances);
     for (int i = 0; metrics && i < metrics_count; ++i)
         pz_metrics_free(&metrics[i]);
     free(metrics);
@@ -1002,5 +1214,11 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
     pz_correspondences_clear(&correspondences);
     panel_choice_clear(&panels);
     garment_input_clear(&input);
+    /* Messages from the shared steps say "flatten:"; name the command that ran. */
+    if (status != PZ_OK && strcmp(args->command, "flatten") != 0 && strncmp(ctx->error, "flatten: ", 9) == 0) {
+        char message[sizeof ctx->error];
+        snprintf(message, sizeof message, "%s", ctx->error + 9);
+        snprintf(ctx->error, sizeof ctx->error, "%s: %.*s", args->command, (int)(sizeof message - 16), message);
+    }
     return status;
 }

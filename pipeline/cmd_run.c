@@ -1,6 +1,694 @@
 /*
- * pipeline/cmd_run.c -- `panelize run GARMENT -o DIR` (being written).
+ * pipeline/cmd_run.c -- `panelize run GARMENT -o DIR`: the whole pipeline,
+ * garment in, sewable pattern out, no hand work (docs/run.md).
+ *
+ *   read -> prepare (--prepare auto: weld, repair, decimate, remesh only when
+ *   the mesh needs it; the welded seams become sketch curves)
+ *   -> field (cross-field with sketches and poses) -> segment (the automatic
+ *   layout: panels that meet the goals, darts, symmetry) -> the flatten
+ *   pipeline (pattern, textile flattening of all panels jointly with seam and
+ *   dart symmetry, metrics, pieces, marker, every file all or nothing).
+ *
+ * With --panels the user's own panels are flattened and segmentation is
+ * skipped (so is preparation, which would renumber the faces the panels
+ * refer to). run reuses `flatten` through pz_flatten_execute and adds:
+ * layout.obj (the seams and darts as polylines on the garment), per panel
+ * `corners`, `darts`, `goals` and `mirror_panel`, and in `summary`
+ * `goals_met` with the reasons when false, plus a `segmentation` and a
+ * `prepare` object in report.json.
+ *
+ * The goals of the final pattern are judged on the final joint flattening:
+ * every panel a disk with at most C corners (pz_segment_goals), every
+ * triangle's warp and weft strain within +-S and no flip or boundary
+ * self-intersection (pz_metrics_compute on every pose).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "pipeline/cli.h"
+#define _POSIX_C_SOURCE 200809L
+#include "pipeline/pattern_output.h"
+#include "segment/segment.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char pz_cli_run_usage[] =
+    "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S]\n"
+    "           [--pose FILE]... [--sketch FILE] [--panels FILE|uv]\n"
+    "           [--symmetry auto|off|x|y|z] [--darts on|off] [--grain X,Y,Z]\n"
+    "           [--prepare auto|off] [--backend textile|lscm|wirewarp|springmass]\n"
+    "           [--iterations N] [--weights S,R,D,M] [--fabric KSU,KSV,KR]\n"
+    "           [--seam-allowance MM] [--hem-allowance MM] [--allowances FILE]\n"
+    "           [--notch-spacing MM] [--paper a4|letter] [--dxf-strict]\n"
+    "           [--fabric-width MM] [--gap MM] [--units U] [--repair] [--json] [--quiet]\n"
+    "\n"
+    "Cuts a 3D garment into panels along field-aligned seams, adds darts and\n"
+    "flattens every panel into a sewable pattern. Writes into DIR everything\n"
+    "`panelize flatten` writes (garment.obj, the pattern files, report.json)\n"
+    "plus layout.obj, the seams and darts as polylines on the 3D garment.\n"
+    "\n"
+    "options:\n"
+    "  -o DIR               the output directory (required)\n"
+    "  --max-corners C      at most C corners per panel (default 8)\n"
+    "  --max-strain S       every triangle's warp and weft strain within +-S\n"
+    "                       (default 0.05: 5% in tension or compression)\n"
+    "  --symmetry M         auto (default: detect a mirror plane), off, x, y or z\n"
+    "  --darts on|off       insert darts where a seam can be partly closed (default on)\n"
+    "  --sketch FILE        JSON {\"curves\": [[[x,y,z], ...], ...]} in the garment's\n"
+    "                       units: curves that become seams, never removed\n"
+    "  --panels FILE|uv     the user's own panels (see panelize flatten): no\n"
+    "                       segmentation, no preparation\n"
+    "  --prepare auto|off   auto (default): weld, repair and remesh the garment\n"
+    "                       only when it needs it (see panelize prepare)\n"
+    "  --grain X,Y,Z        the 3D warp direction (default: the garment's vertical)\n"
+    "  --pose FILE          an extra pose with the same connectivity (repeatable)\n"
+    "  other options        as in panelize flatten --help\n"
+    "\n"
+    "See docs/run.md.\n";
+
+#define DEFAULT_MAX_CORNERS 8
+#define DEFAULT_MAX_STRAIN 0.05
+
+typedef struct run_state {
+    const pz_cli_args *args;
+    /* settings */
+    int32_t max_corners;
+    double max_strain;
+    pz_symmetry_mode symmetry;
+    int darts;
+    int prepare_auto;
+    const char *sketch_path;
+    int grain_given;
+    double grain[3];
+    /* results */
+    pz_prepare_result *prepared;     /* --prepare auto, when it ran */
+    pz_segment_result *segment;      /* NULL with --panels */
+    int32_t field_singularities;
+    double prepare_ms, field_ms, segment_ms;
+    int32_t *panel_mirror;           /* pattern panel -> mirror panel (segmentation only) */
+    int32_t *layout_vertices;        /* garment vertices of the seam and dart polylines */
+    int32_t *layout_offsets;         /* layout_count + 1 */
+    uint8_t *layout_is_dart;         /* layout_count */
+    int32_t layout_count;
+    int goals_met;
+    char reasons[1024];
+} run_state;
+
+/* ---------------------------------------------------------------- options */
+
+static pz_status parse_run_options(const pz_cli_args *args, run_state *state, pz_ctx *ctx)
+{
+    state->max_corners = DEFAULT_MAX_CORNERS;
+    state->max_strain = DEFAULT_MAX_STRAIN;
+    state->darts = 1;
+    state->prepare_auto = 1;
+    const char *text;
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_CORNERS))) {
+        char *end = NULL;
+        errno = 0;
+        long corners = strtol(text, &end, 10);
+        if (end == text || *end || errno == ERANGE || corners < 1 || corners > 1000)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-corners: '%s' is not a whole number in 1..1000", text);
+        state->max_corners = (int32_t)corners;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_STRAIN))) {
+        char *end = NULL;
+        errno = 0;
+        double strain = strtod(text, &end);
+        if (end == text || *end || errno == ERANGE || !isfinite(strain) || strain < 0 || strain > 10)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-strain: '%s' is not a number in 0..10", text);
+        state->max_strain = strain;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_SYMMETRY))) {
+        static const char *const names[] = {"auto", "off", "x", "y", "z"};
+        static const pz_symmetry_mode modes[] = {PZ_SYMMETRY_AUTO, PZ_SYMMETRY_OFF, PZ_SYMMETRY_X, PZ_SYMMETRY_Y,
+                                                 PZ_SYMMETRY_Z};
+        int found = 0;
+        for (int i = 0; i < 5; ++i)
+            if (strcmp(text, names[i]) == 0)
+                state->symmetry = modes[i], found = 1;
+        if (!found)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --symmetry: '%s' is not auto, off, x, y or z", text);
+    }
+    if (args->dart_path_count > 1)
+        return pz_error(ctx, PZ_ERR_USAGE, "run: --darts given twice");
+    if (args->dart_path_count == 1) {
+        if (strcmp(args->dart_paths[0], "on") != 0 && strcmp(args->dart_paths[0], "off") != 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --darts: '%s' is not on or off", args->dart_paths[0]);
+        state->darts = strcmp(args->dart_paths[0], "on") == 0;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_PREPARE))) {
+        if (strcmp(text, "auto") != 0 && strcmp(text, "off") != 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --prepare: '%s' is not auto or off", text);
+        state->prepare_auto = strcmp(text, "auto") == 0;
+    }
+    if (pz_cli_value(args, PZ_CLI_OPT_PANELS))
+        state->prepare_auto = 0;  /* the user's panels refer to the input's faces as they are */
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_SKETCH))) {
+        if (!*text)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --sketch: empty file name");
+        state->sketch_path = text;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_GRAIN))) {
+        /* flatten checks the text itself; run only needs the direction for the goals. */
+        if (sscanf(text, "%lf,%lf,%lf", &state->grain[0], &state->grain[1], &state->grain[2]) == 3) {
+            double length = sqrt(state->grain[0] * state->grain[0] + state->grain[1] * state->grain[1] +
+                                 state->grain[2] * state->grain[2]);
+            if (length > 0 && isfinite(length)) {
+                for (int k = 0; k < 3; ++k)
+                    state->grain[k] /= length;
+                state->grain_given = 1;
+            }
+        }
+    }
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- preparation */
+
+static pz_status prepare_mesh(void *user, pz_mesh **mesh, int *changed, pz_ctx *ctx)
+{
+    run_state *state = user;
+    *changed = 0;
+    if (!state->prepare_auto)
+        return PZ_OK;
+    double start = pz_seconds();
+    pz_prepare_options options = {0};
+    options.name = state->args->positionals[0];
+    int quiet = ctx->quiet;
+    ctx->quiet = 1;  /* the steps are summarized below, not noted one by one */
+    pz_status status = pz_prepare_auto(*mesh, &options, &state->prepared, ctx);
+    ctx->quiet = quiet;
+    state->prepare_ms = pz_cli_elapsed_ms(start, pz_seconds());
+    if (status != PZ_OK)
+        return status;
+    const pz_prepare_report *report = &state->prepared->report;
+    int any_change = report->output_faces != report->input_faces || report->output_vertices != report->input_vertices;
+    for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i)
+        if (report->steps[i].ran && i != PZ_PREPARE_HAUSDORFF)
+            pz_note(ctx, "run: prepare: %s: %s", report->steps[i].name, report->steps[i].detail);
+    if (any_change) {
+        pz_mesh_free(mesh);
+        *mesh = state->prepared->mesh;
+        state->prepared->mesh = NULL;
+        *changed = 1;
+    }
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- segmentation */
+
+static void on_progress(void *user, const char *stage, int32_t panel_count, double worst_strain)
+{
+    pz_ctx *ctx = user;
+    if (worst_strain >= 0)
+        pz_note(ctx, "run: %s: %d panels, worst strain %.4f", stage, (int)panel_count, worst_strain);
+    else
+        pz_note(ctx, "run: %s: %d panels", stage, (int)panel_count);
+}
+
+/* The --sketch curves plus the seams preparation welded (a designer's seams survive the weld). */
+static pz_status gather_sketch(const run_state *state, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    pz_sketch *given = NULL;
+    if (state->sketch_path) {
+        pz_status status = pz_sketch_read(state->sketch_path, mesh->unit_scale, &given, ctx);
+        if (status != PZ_OK)
+            return status;
+    }
+    const pz_prepare_result *prepared = state->prepared;
+    int32_t welded = prepared && prepared->mesh == NULL ? prepared->seam_count : 0;
+    if (welded == 0) {
+        *out = given;
+        return PZ_OK;
+    }
+    int32_t given_curves = given ? given->curve_count : 0;
+    int32_t given_points = given ? given->curve_offsets[given_curves] : 0;
+    int32_t points = given_points + prepared->seam_offsets[welded];
+    pz_sketch *sketch = calloc(1, sizeof *sketch);
+    if (sketch) {
+        sketch->curve_offsets = malloc(((size_t)given_curves + (size_t)welded + 1) * sizeof(int32_t));
+        sketch->points = malloc(((size_t)points + 1) * 3 * sizeof(double));
+    }
+    if (!sketch || !sketch->curve_offsets || !sketch->points) {
+        pz_sketch_free(&sketch);
+        pz_sketch_free(&given);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory gathering sketches");
+    }
+    int32_t at = 0;
+    for (int32_t c = 0; c < given_curves; ++c)
+        sketch->curve_offsets[sketch->curve_count++] = given->curve_offsets[c];
+    if (given_points)
+        memcpy(sketch->points, given->points, 3 * (size_t)given_points * sizeof(double));
+    at = given_points;
+    for (int32_t s = 0; s < welded; ++s) {
+        int32_t first = prepared->seam_offsets[s], last = prepared->seam_offsets[s + 1];
+        if (last - first < 2)
+            continue;
+        sketch->curve_offsets[sketch->curve_count++] = at;
+        for (int32_t i = first; i < last; ++i, ++at)
+            memcpy(sketch->points + 3 * (size_t)at, mesh->positions + 3 * (size_t)prepared->seam_vertices[i],
+                   3 * sizeof(double));
+    }
+    sketch->curve_offsets[sketch->curve_count] = at;
+    pz_sketch_free(&given);
+    *out = sketch;
+    return PZ_OK;
+}
+
+static pz_status choose_panels(void *user, const pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
+                               uint8_t **extra_cuts, pz_ctx *ctx)
+{
+    run_state *state = user;
+    pz_topology *topology = NULL;
+    pz_sketch *sketch = NULL;
+    pz_field *field = NULL;
+    pz_status status = pz_topology_build(garment, &topology, ctx);
+    if (status == PZ_OK)
+        status = gather_sketch(state, garment, &sketch, ctx);
+    double start = pz_seconds();
+    if (status == PZ_OK) {
+        pz_field_options options = {0};
+        options.sketch = sketch;
+        options.use_poses = 1;
+        status = pz_field_compute(garment, topology, &options, &field, ctx);
+    }
+    double field_end = pz_seconds();
+    state->field_ms = pz_cli_elapsed_ms(start, field_end);
+    if (status == PZ_OK) {
+        state->field_singularities = field->singularity_count;
+        pz_note(ctx, "run: field: %.0f ms, %d singularities", state->field_ms, (int)field->singularity_count);
+        pz_segment_options options;
+        pz_segment_options_default(&options);
+        options.max_corners = state->max_corners;
+        options.max_strain = state->max_strain;
+        options.symmetry = state->symmetry;
+        options.darts = state->darts;
+        options.sketch = sketch;
+        if (state->grain_given)
+            memcpy(options.grain, state->grain, sizeof options.grain);
+        else
+            pz_mesh_vertical_axis(garment, options.grain);
+        options.on_progress = on_progress;
+        options.user = ctx;
+        status = pz_segment(garment, topology, field, &options, &state->segment, ctx);
+    }
+    state->segment_ms = pz_cli_elapsed_ms(field_end, pz_seconds());
+    if (status == PZ_OK) {
+        const pz_segment_result *segment = state->segment;
+        size_t faces = (size_t)garment->face_count, edges = (size_t)topology->edge_count;
+        *face_panel = malloc((faces + 1) * sizeof(int32_t));
+        *extra_cuts = malloc(edges + 1);
+        if (!*face_panel || !*extra_cuts)
+            status = pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+        else {
+            memcpy(*face_panel, segment->face_panel, faces * sizeof(int32_t));
+            memcpy(*extra_cuts, segment->extra_cuts, edges);
+            *panel_count = segment->panel_count;
+        }
+        pz_note(ctx, "run: segment: %.0f ms, %d panels, %d darts%s", state->segment_ms, (int)segment->panel_count,
+                (int)segment->dart_count, segment->goals_met ? "" : " (goals not met)");
+    }
+    pz_field_free(&field);
+    pz_sketch_free(&sketch);
+    pz_topology_free(&topology);
+    return status;
+}
+
+static const int32_t *panel_mirror(void *user, const pz_pattern *pattern)
+{
+    run_state *state = user;
+    const pz_segment_result *segment = state->segment;
+    if (!segment || segment->panel_count != pattern->panel_count || !segment->symmetry.found)
+        return NULL;
+    free(state->panel_mirror);
+    state->panel_mirror = malloc(((size_t)segment->panel_count + 1) * sizeof(int32_t));
+    if (!state->panel_mirror)
+        return NULL;  /* no pairs: every piece is then cut once, which is still right */
+    for (int32_t p = 0; p < segment->panel_count; ++p)
+        state->panel_mirror[p] = segment->panels[p].mirror_panel;
+    return state->panel_mirror;
+}
+
+/* ---------------------------------------------------------------- layout curves */
+
+/*
+ * The layout as polylines of garment vertices, from the pattern itself so
+ * that --panels and segmentation look the same: one polyline per seam (its
+ * side a) and one per dart (tip, then leg a).
+ */
+static pz_status build_layout(run_state *state, const pz_pattern *pattern, pz_ctx *ctx)
+{
+    if (state->layout_offsets)
+        return PZ_OK;
+    int64_t total = 0;
+    int32_t count = pattern->seam_count + pattern->dart_count;
+    for (int32_t s = 0; s < pattern->seam_count; ++s)
+        total += pattern->seams[s].pair_count;
+    for (int32_t d = 0; d < pattern->dart_count; ++d)
+        total += pattern->darts[d].pair_count + 1;
+    state->layout_offsets = malloc(((size_t)count + 1) * sizeof(int32_t));
+    state->layout_vertices = malloc(((size_t)total + 1) * sizeof(int32_t));
+    state->layout_is_dart = calloc((size_t)count + 1, 1);
+    if (!state->layout_offsets || !state->layout_vertices || !state->layout_is_dart)
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    int32_t at = 0, curve = 0;
+    for (int32_t s = 0; s < pattern->seam_count; ++s, ++curve) {
+        state->layout_offsets[curve] = at;
+        for (int32_t i = 0; i < pattern->seams[s].pair_count; ++i)
+            state->layout_vertices[at++] = pattern->vertex_origin[pattern->seams[s].side_a[i]];
+    }
+    for (int32_t d = 0; d < pattern->dart_count; ++d, ++curve) {
+        const pz_dart *dart = &pattern->darts[d];
+        state->layout_offsets[curve] = at;
+        state->layout_is_dart[curve] = 1;
+        state->layout_vertices[at++] = pattern->vertex_origin[dart->tip];
+        for (int32_t i = 0; i < dart->pair_count; ++i)
+            state->layout_vertices[at++] = pattern->vertex_origin[dart->leg_a[i]];
+    }
+    state->layout_offsets[count] = at;
+    state->layout_count = count;
+    return PZ_OK;
+}
+
+static void layout_curves(void *user, const pz_pattern *pattern, const int32_t **vertices, const int32_t **offsets,
+                          int32_t *count)
+{
+    run_state *state = user;
+    pz_ctx quiet;
+    pz_ctx_init(&quiet);
+    quiet.quiet = 1;
+    if (build_layout(state, pattern, &quiet) != PZ_OK) {
+        *count = 0;  /* out of memory: garment.glb then shows the cut mesh's own seams */
+        return;
+    }
+    *vertices = state->layout_vertices;
+    *offsets = state->layout_offsets;
+    *count = state->layout_offsets ? state->layout_count : 0;
+}
+
+/* layout.obj: the garment's vertices used by the layout (in the input's units, like garment.obj), one
+ * group and one polyline (`l`) per seam or dart. */
+static pz_status write_layout(void *user, FILE *file, const pz_pattern *pattern, pz_ctx *ctx)
+{
+    run_state *state = user;
+    pz_status status = build_layout(state, pattern, ctx);
+    if (status != PZ_OK)
+        return status;
+    const pz_mesh *mesh = pattern->mesh;
+    double scale = mesh->unit_scale > 0 ? mesh->unit_scale : 1.0;
+    /* The cut mesh's vertex of each garment vertex (any copy has the garment's position). */
+    int32_t garment_vertices = 0;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        if (pattern->vertex_origin[v] + 1 > garment_vertices)
+            garment_vertices = pattern->vertex_origin[v] + 1;
+    int32_t *copy = malloc(((size_t)garment_vertices + 1) * sizeof(int32_t));
+    if (!copy)
+        return pz_error(ctx, PZ_ERR_NOMEM, "layout.obj: out of memory");
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        copy[pattern->vertex_origin[v]] = v;
+    fprintf(file, "# panelize layout: %d seams, %d darts (polylines on the garment)\n", (int)pattern->seam_count,
+            (int)pattern->dart_count);
+    int32_t seam = 0, dart = 0;
+    for (int32_t c = 0; c < state->layout_count; ++c) {
+        int32_t first = state->layout_offsets[c], last = state->layout_offsets[c + 1];
+        if (state->layout_is_dart[c])
+            fprintf(file, "g dart_%d\n", (int)dart++);
+        else
+            fprintf(file, "g seam_%d_panels_%d_%d\n", (int)seam, (int)pattern->seams[seam].panel_a,
+                    (int)pattern->seams[seam].panel_b), ++seam;
+        for (int32_t i = first; i < last; ++i) {
+            const double *p = mesh->positions + 3 * (size_t)copy[state->layout_vertices[i]];
+            fprintf(file, "v %.9g %.9g %.9g\n", p[0] / scale, p[1] / scale, p[2] / scale);
+        }
+        fputs("l", file);
+        for (int32_t i = first; i < last; ++i)
+            fprintf(file, " %d", (int)(i + 1));
+        fputc('\n', file);
+    }
+    free(copy);
+    if (ferror(file))
+        return pz_error(ctx, PZ_ERR_CREATE, "layout.obj: write error");
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- goals and report */
+
+/* The final goals of every panel: disk and corners from the layout, strain and injectivity from the
+ * final flattening. Fills the per-panel results and state->goals_met / reasons. */
+static pz_status judge_goals(run_state *state, const pz_mesh *garment, const pz_pattern *pattern,
+                             const pz_metrics *metrics, pz_segment_panel *panels, pz_ctx *ctx)
+{
+    int32_t panel_count = pattern->panel_count;
+    const int32_t *cut_faces = pattern->mesh->faces;  /* the garment's faces, in order, on cut-mesh copies */
+    state->goals_met = 1;
+    state->reasons[0] = '\0';
+    pz_topology *topology = NULL;
+    int32_t *face_ids = NULL, *face_offsets = NULL, *cursor = NULL;
+    uint8_t *edge_cut = NULL;
+    pz_status status = pz_topology_build(garment, &topology, ctx);
+    if (status == PZ_OK) {
+        face_ids = malloc(((size_t)garment->face_count + 1) * sizeof(int32_t));
+        face_offsets = calloc((size_t)panel_count + 1, sizeof(int32_t));
+        cursor = malloc(((size_t)panel_count + 1) * sizeof(int32_t));
+        edge_cut = calloc((size_t)topology->edge_count + 1, 1);
+        if (!face_ids || !face_offsets || !cursor || !edge_cut)
+            status = pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory judging the goals");
+    }
+    if (status == PZ_OK) {
+        /* An edge is cut when its two faces use different copies of one of its ends. */
+        for (int32_t e = 0; e < topology->edge_count; ++e) {
+            int32_t h = topology->edge_halfedge[2 * e], t = topology->edge_halfedge[2 * e + 1];
+            if (t >= 0)
+                edge_cut[e] = cut_faces[h] != cut_faces[pz_he_next(t)] || cut_faces[pz_he_next(h)] != cut_faces[t];
+        }
+        for (int32_t f = 0; f < garment->face_count; ++f)
+            ++face_offsets[pattern->face_panel[f] + 1];
+        for (int32_t p = 0; p < panel_count; ++p)
+            face_offsets[p + 1] += face_offsets[p];
+        memcpy(cursor, face_offsets, (size_t)panel_count * sizeof(int32_t));
+        for (int32_t f = 0; f < garment->face_count; ++f)
+            face_ids[cursor[pattern->face_panel[f]]++] = f;
+    }
+    pz_goal_options goal_options = {state->max_corners, state->max_strain, {0, 0, 1}, 0};
+    size_t used = 0;
+    for (int32_t p = 0; p < panel_count && status == PZ_OK; ++p) {
+        pz_goal_result goals;
+        /* Only the disk test and the corners are taken from here: a huge strain bound keeps the
+         * evaluation's own flattening from mattering; the final strain decides. */
+        pz_goal_options shape_only = goal_options;
+        shape_only.max_strain = 1e9;
+        status = pz_segment_goals(garment, topology, edge_cut, face_ids + face_offsets[p],
+                                  face_offsets[p + 1] - face_offsets[p], &shape_only, &goals, ctx);
+        if (status != PZ_OK)
+            break;
+        const pz_panel_metrics *panel = &metrics->panels[p];
+        double strain = fmax(fmax(fabs(panel->strain_warp.max), fabs(panel->strain_weft.max)), 0.0);
+        goals.failures &= PZ_GOAL_NOT_DISK | PZ_GOAL_CORNERS;
+        goals.max_abs_strain = strain;
+        goals.flipped_triangles = panel->flipped_triangles;
+        if (strain > state->max_strain)
+            goals.failures |= PZ_GOAL_STRAIN;
+        if (panel->flipped_triangles > 0 || panel->boundary_self_intersections > 0)
+            goals.failures |= PZ_GOAL_NOT_INJECTIVE;
+        panels[p].goals = goals;
+        panels[p].corners = goals.corners;
+        if (goals.failures) {
+            state->goals_met = 0;
+            char text[256];
+            pz_goal_describe(&goals, &goal_options, text, sizeof text);
+            int written = snprintf(state->reasons + used, sizeof state->reasons - used, "%spanel %d: %s",
+                                   used ? "; " : "", (int)p, text);
+            if (written > 0 && used + (size_t)written < sizeof state->reasons)
+                used += (size_t)written;
+        }
+    }
+    free(edge_cut);
+    free(cursor);
+    free(face_offsets);
+    free(face_ids);
+    pz_topology_free(&topology);
+    return status;
+}
+
+static int add_number(cJSON *object, const char *name, double value)
+{
+    return cJSON_AddNumberToObject(object, name, value) != NULL;
+}
+
+static int extend_panels(run_state *state, cJSON *root, const pz_pattern *pattern, const pz_segment_panel *panels)
+{
+    cJSON *list = cJSON_GetObjectItem(root, "panels");
+    int ok = 1;
+    int32_t *darts = calloc((size_t)pattern->panel_count + 1, sizeof(int32_t));
+    if (!darts)
+        return 0;
+    for (int32_t d = 0; d < pattern->dart_count; ++d)
+        ++darts[pattern->darts[d].panel];
+    int32_t p = 0;
+    for (cJSON *item = list ? list->child : NULL; item && p < pattern->panel_count; item = item->next, ++p) {
+        ok &= add_number(item, "corners", panels[p].corners);
+        ok &= add_number(item, "darts", darts[p]);
+        ok &= add_number(item, "mirror_panel", state->panel_mirror ? state->panel_mirror[p] : -1);
+        char text[256];
+        pz_goal_options options = {state->max_corners, state->max_strain, {0, 0, 1}, 0};
+        pz_goal_describe(&panels[p].goals, &options, text, sizeof text);
+        ok &= cJSON_AddBoolToObject(item, "goals_met", panels[p].goals.failures == 0) != NULL;
+        if (panels[p].goals.failures)
+            ok &= cJSON_AddStringToObject(item, "goals", text) != NULL;
+    }
+    free(darts);
+    return ok;
+}
+
+static int extend_segmentation(const run_state *state, cJSON *root)
+{
+    cJSON *object = cJSON_AddObjectToObject(root, "segmentation");
+    if (!object)
+        return 0;
+    const pz_segment_result *segment = state->segment;
+    int ok = cJSON_AddStringToObject(object, "panels", segment ? "automatic" : "given") != NULL;
+    ok &= add_number(object, "max_corners", state->max_corners);
+    ok &= add_number(object, "max_strain", state->max_strain);
+    ok &= cJSON_AddBoolToObject(object, "darts", state->darts) != NULL;
+    ok &= add_number(object, "field_singularities", state->field_singularities);
+    if (!segment)
+        return ok;
+    ok &= add_number(object, "candidates", segment->candidate_count);
+    ok &= add_number(object, "inserted", segment->inserted_count);
+    ok &= add_number(object, "removed", segment->removed_count);
+    ok &= add_number(object, "evaluations", segment->evaluation_count);
+    ok &= add_number(object, "dart_count", segment->dart_count);
+    ok &= cJSON_AddBoolToObject(object, "layout_goals_met", segment->goals_met) != NULL;
+    cJSON *symmetry = cJSON_AddObjectToObject(object, "symmetry");
+    ok &= symmetry != NULL;
+    if (symmetry) {
+        const pz_symmetry *plane = &segment->symmetry;
+        static const char *const axes[] = {"x", "y", "z"};
+        ok &= cJSON_AddBoolToObject(symmetry, "found", plane->found) != NULL;
+        ok &= cJSON_AddStringToObject(symmetry, "axis", plane->found && plane->axis >= 0 && plane->axis < 3
+                                                             ? axes[plane->axis] : "none") != NULL;
+        ok &= add_number(symmetry, "offset", plane->found ? plane->offset : 0);
+        ok &= add_number(symmetry, "mesh_residual_mm", plane->found ? plane->residual_mm : 0);
+        ok &= add_number(symmetry, "layout_residual_mm", plane->found ? segment->symmetry_residual_mm : 0);
+    }
+    cJSON *timings = cJSON_AddObjectToObject(object, "timings_ms");
+    ok &= timings != NULL;
+    if (timings) {
+        ok &= add_number(timings, "graph", segment->graph_ms);
+        ok &= add_number(timings, "candidates", segment->candidates_ms);
+        ok &= add_number(timings, "insert", segment->insert_ms);
+        ok &= add_number(timings, "remove", segment->remove_ms);
+        ok &= add_number(timings, "darts", segment->darts_ms);
+        ok &= add_number(timings, "total", segment->total_ms);
+    }
+    return ok;
+}
+
+static int extend_prepare(const run_state *state, cJSON *root)
+{
+    cJSON *object = cJSON_AddObjectToObject(root, "prepare");
+    if (!object)
+        return 0;
+    int ok = cJSON_AddStringToObject(object, "mode", state->prepare_auto ? "auto" : "off") != NULL;
+    if (!state->prepared)
+        return ok;
+    const pz_prepare_report *report = &state->prepared->report;
+    cJSON *steps = cJSON_AddArrayToObject(object, "steps");
+    ok &= steps != NULL;
+    for (int i = 0; steps && i < PZ_PREPARE_STEP_COUNT; ++i) {
+        cJSON *step = cJSON_CreateObject();
+        ok &= step && cJSON_AddItemToArray(steps, step);
+        if (!step)
+            break;
+        ok &= cJSON_AddStringToObject(step, "name", report->steps[i].name ? report->steps[i].name : "") != NULL;
+        ok &= cJSON_AddBoolToObject(step, "ran", report->steps[i].ran) != NULL;
+        ok &= cJSON_AddStringToObject(step, "detail", report->steps[i].detail) != NULL;
+    }
+    ok &= add_number(object, "input_faces", report->input_faces);
+    ok &= add_number(object, "output_faces", report->output_faces);
+    ok &= add_number(object, "hausdorff_mm", report->hausdorff);
+    ok &= add_number(object, "welded_seams", state->prepared->seam_count);
+    return ok;
+}
+
+static int extend_report(void *user, cJSON *root, const pz_mesh *garment, const pz_pattern *pattern,
+                         const pz_metrics *metrics)
+{
+    run_state *state = user;
+    pz_ctx quiet_ctx;
+    pz_ctx_init(&quiet_ctx);
+    quiet_ctx.quiet = 1;
+    pz_segment_panel *panels = calloc((size_t)pattern->panel_count + 1, sizeof *panels);
+    int ok = panels && judge_goals(state, garment, pattern, metrics, panels, &quiet_ctx) == PZ_OK;
+    if (ok)
+        ok &= extend_panels(state, root, pattern, panels);
+    free(panels);
+    cJSON *summary = cJSON_GetObjectItem(root, "summary");
+    if (ok && summary) {
+        ok &= cJSON_AddBoolToObject(summary, "goals_met", state->goals_met) != NULL;
+        if (!state->goals_met)
+            ok &= cJSON_AddStringToObject(summary, "goals_reasons", state->reasons) != NULL;
+    }
+    cJSON *timings = cJSON_GetObjectItem(root, "timings_ms");
+    if (ok && timings) {
+        ok &= add_number(timings, "prepare", pz_cli_round(state->prepare_ms, 3));
+        ok &= add_number(timings, "field", pz_cli_round(state->field_ms, 3));
+        ok &= add_number(timings, "segment", pz_cli_round(state->segment_ms, 3));
+    }
+    if (ok)
+        ok &= extend_segmentation(state, root) && extend_prepare(state, root);
+    return ok;
+}
+
+static void print_summary(void *user)
+{
+    const run_state *state = user;
+    if (state->segment)
+        printf("segmentation:       %d panels, %d darts, symmetry %s\n", (int)state->segment->panel_count,
+               (int)state->segment->dart_count, state->segment->symmetry.found ? "yes" : "no");
+    printf("goals met:          %s%s%s\n", state->goals_met ? "yes" : "no", state->goals_met ? "" : ": ",
+           state->goals_met ? "" : state->reasons);
+}
+
+/* ---------------------------------------------------------------- the command */
+
+static void run_state_clear(run_state *state)
+{
+    pz_prepare_result_free(&state->prepared);
+    pz_segment_result_free(&state->segment);
+    free(state->panel_mirror);
+    free(state->layout_vertices);
+    free(state->layout_offsets);
+    free(state->layout_is_dart);
+    memset(state, 0, sizeof *state);
+}
+
+pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx)
+{
+    run_state state;
+    memset(&state, 0, sizeof state);
+    state.args = args;
+    pz_status status = parse_run_options(args, &state, ctx);
+    if (status == PZ_OK && args->positional_count > 1)
+        status = pz_error(ctx, PZ_ERR_USAGE, "run: expected one GARMENT, got %d files", args->positional_count);
+    if (status != PZ_OK)
+        return status;
+    static const pz_flatten_extra_file extra_files[] = {{"layout.obj", write_layout}};
+    pz_flatten_extension extension = {0};
+    extension.user = &state;
+    extension.prepare_mesh = prepare_mesh;
+    extension.choose_panels = choose_panels;
+    extension.panels_source = "segmentation";
+    extension.panel_mirror = panel_mirror;
+    extension.layout_curves = layout_curves;
+    extension.extend_report = extend_report;
+    extension.print_summary = print_summary;
+    extension.extra_file_count = 1;
+    extension.extra_files = extra_files;
+    status = pz_flatten_execute(args, &extension, ctx);
+    run_state_clear(&state);
+    return status;
+}

@@ -42,8 +42,16 @@ static const pz_cli_command command_table[] = {
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
          PZ_CLI_OPT_PANELS | PZ_CLI_OPT_SEAMS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND |
          PZ_CLI_OPT_ITERATIONS | PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME |
-         PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES,
+         PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES | PZ_CLI_OPT_EXPORT,
      pz_cli_flatten},
+    {"run", "the whole pipeline: garment in, panels, darts and a sewable pattern out",
+     pz_cli_run_usage,
+     PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
+         PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |
+         PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |
+         PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |
+         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_EXPORT,
+     pz_cli_run},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |

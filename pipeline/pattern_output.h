@@ -9,6 +9,7 @@
 #ifndef PZ_PATTERN_OUTPUT_H
 #define PZ_PATTERN_OUTPUT_H
 
+#include "export/export.h"
 #include "param/param.h"
 #include "pipeline/cli.h"
 
@@ -131,5 +132,49 @@ typedef struct pz_flatten_report {
 
 /** Builds report.json (docs/flatten.md); NULL when out of memory. */
 cJSON *pz_flatten_report_json(const pz_flatten_report *report);
+
+/* ---------------------------------------------------------------- the shared command */
+
+/** An extra file a command adds to flatten's outputs (layout.obj for run). */
+typedef struct pz_flatten_extra_file {
+    const char *name;
+    pz_status (*write)(void *user, FILE *file, const pz_pattern *pattern, pz_ctx *ctx);
+} pz_flatten_extra_file;
+
+/**
+ * What `panelize run` changes in the flatten command (cmd_run.c): where the
+ * panels come from when --panels is not given (the automatic layout), what
+ * report.json gains, which extra files are written. Every pointer may be
+ * NULL/0; `flatten` itself passes no extension.
+ */
+typedef struct pz_flatten_extension {
+    void *user;
+    /* Called on the freshly read garment (mm, not yet validated): may replace *mesh by a prepared one
+     * (run --prepare auto); sets *changed when it did, so vertex ids of the input no longer apply. */
+    pz_status (*prepare_mesh)(void *user, pz_mesh **mesh, int *changed, pz_ctx *ctx);
+    /* Panels for a garment without --panels: face_panel (face_count, malloc'd, the caller frees),
+     * *panel_count, *extra_cuts (edge flags over pz_topology_build(garment), malloc'd or NULL). */
+    pz_status (*choose_panels)(void *user, const pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
+                               uint8_t **extra_cuts, pz_ctx *ctx);
+    const char *panels_source;           /* report's panels.source for choose_panels ("segmentation") */
+    /* Called once the pattern exists, before any export: the mirror panel of each panel (may return NULL)
+     * and the layout curves as garment vertex polylines for garment.glb (may leave them empty). */
+    const int32_t *(*panel_mirror)(void *user, const pz_pattern *pattern);
+    void (*layout_curves)(void *user, const pz_pattern *pattern, const int32_t **vertices, const int32_t **offsets,
+                          int32_t *count);
+    /* Adds the command's own keys to report.json (root) and to the text summary. */
+    int (*extend_report)(void *user, cJSON *root, const pz_mesh *garment, const pz_pattern *pattern,
+                         const pz_metrics *metrics);
+    void (*print_summary)(void *user);
+    int32_t extra_file_count;
+    const pz_flatten_extra_file *extra_files;
+} pz_flatten_extension;
+
+/**
+ * The flatten pipeline shared by `flatten` and `run`: read, panels, pattern,
+ * back-end, metrics, pieces and marker, all files written all-or-nothing.
+ * extension may be NULL (plain `flatten`).
+ */
+pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension *extension, pz_ctx *ctx);
 
 #endif /* PZ_PATTERN_OUTPUT_H */

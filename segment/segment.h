@@ -21,6 +21,7 @@
  *  - it is a topological disk (darts' slits are part of its boundary);
  *  - it has at most max_corners corners (vertices of its outline where the
  *    neighbouring panel changes, plus sharp turns of the outline);
+ *    the outline is taken with its darts closed: a dart adds no corner;
  *  - its flattening (LSCM start + a few textile iterations, grain given) is
  *    injective and every triangle's warp and weft strain lies within
  *    +-max_strain.
@@ -111,14 +112,17 @@ typedef struct pz_goal_result {
     int32_t boundary_loops;
     double max_abs_strain;       /* worst |warp| or |weft| strain over the panel's triangles (-1: not flattened) */
     int32_t flipped_triangles;
+    int32_t darts;               /* dart slits of the panel (a slit with a tip inside) */
+    double min_dart_opening_deg; /* smallest opening angle at a dart tip in the flattening, -1 none or not flattened */
 } pz_goal_result;
 
 /**
  * Evaluates one panel: the faces face_ids[0..count-1] of `mesh` (a valid
  * garment with topology), `edge_cut` the layout's cut edges (the corners
  * depend on which neighbour lies across each outline edge; the panel's own
- * slits are cut). Flattens only when the panel is a disk. Thread-safe (call
- * it from several threads at once).
+ * slits are cut). Flattens only when the panel is a disk with at most
+ * max_corners corners (otherwise max_abs_strain = -1: the panel must be split
+ * anyway). Thread-safe (call it from several threads at once).
  */
 pz_status pz_segment_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
                            const int32_t *face_ids, int32_t count, const pz_goal_options *options,
@@ -142,8 +146,9 @@ typedef struct pz_segment_options {
     int32_t max_depth;           /* recursion levels into failing panels; 0 = default */
     int threads;                 /* OpenMP threads; 0 = default. The result does not depend on it. */
     pz_trace_graph_options graph;
-    /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts", "symmetry"),
-     * current panel count and worst strain over the panels evaluated so far. */
+    /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
+     * each insertion, removal and dart with the current panel count and the worst strain among the
+     * current panels that have been flattened (0 when none has). */
     void (*on_progress)(void *user, const char *stage, int32_t panel_count, double worst_strain);
     void *user;
 } pz_segment_options;
@@ -197,8 +202,13 @@ typedef struct pz_segment_result {
  * cross-field (field->directions). The run always ends: when the goals cannot
  * be met (S = 0 on a sphere, a budget exhausted), the best layout found is
  * returned with goals_met = 0 and the reasons, still PZ_OK. A closed surface
- * gets loops; several components are segmented each on its own.
- * Errors: PZ_ERR_USAGE (bad options), PZ_ERR_NOMEM, PZ_ERR_INTERNAL.
+ * gets loops; several components are segmented each on its own. With
+ * PZ_SYMMETRY_AUTO a detected plane whose residual exceeds 0.25 mean edges
+ * is not used (result->symmetry.found = 0, its residual kept): mirrored
+ * paths would land off the mirrored geometry (docs/segment.md).
+ * Caller frees *out with pz_segment_result_free.
+ * Errors: PZ_ERR_USAGE (bad options), PZ_ERR_DATA (a sketch point off the
+ * mesh), PZ_ERR_NOMEM, PZ_ERR_INTERNAL.
  */
 pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field,
                      const pz_segment_options *options, pz_segment_result **out, pz_ctx *ctx);

@@ -59,7 +59,15 @@ typedef struct pz_trace_graph {
     int32_t *link_offsets;       /* node_count + 1 */
     int32_t *link_targets;       /* link_offsets[node_count]: target node */
     double *link_weights;        /* link_offsets[node_count]: > 0 */
+    /* The 4-sheeted covering (the M4 stratification of pz_trace_distance): every mesh edge v-w in both
+     * directions, and the arm of w that arm k of v becomes there: (k + neighbor_shift) % 4. */
+    int32_t *neighbor_offsets;   /* vertex_count + 1 */
+    int32_t *neighbor_vertices;  /* neighbor_offsets[vertex_count] */
+    uint8_t *neighbor_shift;     /* neighbor_offsets[vertex_count]: 0..3 */
+    double *neighbor_lengths;    /* neighbor_offsets[vertex_count]: the edge's 3D length */
     double mean_edge_length;
+    double match_angle_deg;      /* the options actually used (defaults filled in) */
+    double drift_weight;
 } pz_trace_graph;
 
 /** Graph options. Zero-initialized = defaults. */
@@ -72,12 +80,20 @@ typedef struct pz_trace_graph_options {
  * Builds the tracing graph of a valid mesh from a per-face cross (one unit arm
  * per face, face_count x 3, e.g. pz_field.directions): the cross is carried
  * to vertices by the 90-degree-invariant average of the incident faces' arms
- * (angle-weighted), boundary vertices take the boundary's own direction.
+ * (angle-weighted). A boundary node is ENTER when its arm points into the
+ * surface, EXIT when out, ALONG within 45 degrees of a boundary edge
+ * (docs/trace.md; a convex corner has no ENTER node).
  * options may be NULL. Errors: PZ_ERR_USAGE (bad options), PZ_ERR_NOMEM.
  */
 pz_status pz_trace_graph_build(const pz_mesh *mesh, const pz_topology *topology, const double *face_arms,
                                const pz_trace_graph_options *options, pz_trace_graph **out, pz_ctx *ctx);
 void pz_trace_graph_free(pz_trace_graph **graph);
+
+/** Arm `arm` (0..3, taken mod 4) of a vertex's cross as a unit 3D vector (zero for an isolated vertex). */
+void pz_trace_arm_direction(const pz_trace_graph *graph, int32_t vertex, int arm, double out[3]);
+
+/** The arm (0..3) of the vertex's cross closest to `direction` (projected on the vertex's tangent plane). */
+int pz_trace_closest_arm(const pz_trace_graph *graph, int32_t vertex, const double direction[3]);
 
 typedef enum pz_trace_path_kind {
     PZ_TRACE_LOOP = 0,       /* closed: the last vertex links back to the first */
@@ -93,7 +109,8 @@ typedef struct pz_trace_path {
     int32_t *vertices;         /* mesh vertices; consecutive ones share an edge; no vertex twice */
     uint8_t *arms;             /* vertex_count: the arm (0..3) the path travels along at each vertex */
     double length_mm;          /* 3D length (closing edge included when closed) */
-    double cost;               /* graph weight (length times drift penalty) */
+    double cost;               /* sum of the link weights (length times drift penalty); a step with no graph
+                                  link (sketches, mirrored gaps) costs its length times 1 + drift_weight */
 } pz_trace_path;
 
 /** A list of paths. Owns every path's arrays. */
@@ -110,10 +127,12 @@ typedef struct pz_trace_candidate_options {
                                   boundary; 0 = default (docs/trace.md) */
     int32_t interior_sources;  /* interior vertices used as loop sources (both axes each), subsampled
                                   uniformly over the area; 0 = default */
-    int loops;                 /* 1 (default when 0 and border is 0 too): trace loops; -1: none */
-    int border;                /* 1 (default when 0): trace border-to-border paths; -1: none */
+    int loops;                 /* 1 or 0 (default): trace loops; -1: none */
+    int border;                /* 1 or 0 (default): trace border-to-border paths; -1: none */
     double max_length_factor;  /* drop paths longer than this times the bounding-box diagonal; 0 = 3 */
     int threads;               /* OpenMP threads; 0 = default. The result does not depend on it. */
+    int smooth;                /* 1 (default when 0): drop detours round a triangle (docs/trace.md); -1: keep
+                                  the paths as the search found them */
 } pz_trace_candidate_options;
 
 /**
@@ -129,10 +148,15 @@ pz_status pz_trace_candidates(const pz_trace_graph *graph, const pz_mesh *mesh, 
                               const pz_trace_candidate_options *options, pz_trace_paths **out, pz_ctx *ctx);
 
 /**
- * Multi-source Dijkstra over the graph from the nodes the given paths
- * occupy (each path vertex: its arm and the opposite arm, same axis), plus,
- * when `from_boundary` is set, the boundary nodes running along the border.
- * distance: node_count, written (graph weight units; INFINITY if unreachable).
+ * Multi-source Dijkstra from the nodes the given paths occupy (each path
+ * vertex: its arm and the opposite arm, same axis), plus, when
+ * `from_boundary` is set, the boundary nodes running along the border. It
+ * runs on the 4-sheeted covering (neighbor_* above), not on the aligned
+ * links: node (v, k) reaches (w, k + shift) over every edge v-w, at the edge's
+ * length. So the distance spreads sideways within a path's own axis (a
+ * parallel path is near) while the other axis is reached only round a
+ * singularity (a path crossing orthogonally is far, INFINITY without one).
+ * distance: node_count, written (mm; INFINITY if unreachable).
  * paths may be NULL with path_count 0.
  */
 pz_status pz_trace_distance(const pz_trace_graph *graph, const pz_trace_path *paths, int32_t path_count,
@@ -144,8 +168,9 @@ double pz_trace_path_mean_distance(const pz_trace_path *path, const double *dist
 /**
  * 1 when paths a and b share a vertex at which they travel along the same
  * axis (a tangential meeting, pietroni2022 Sec. 4.2), 0 when they only cross
- * orthogonally or do not meet. Shared vertices on the mesh boundary where
- * both paths end are ignored. `vertex_count` sizes a scratch buffer; O(length).
+ * orthogonally or do not meet. A shared vertex that is an end of both
+ * (open) paths is ignored: two border paths ending at one boundary vertex.
+ * `vertex_count` (the mesh's) sizes a scratch buffer; O(length).
  */
 int pz_trace_paths_tangential(const pz_trace_path *a, const pz_trace_path *b, int32_t vertex_count);
 
@@ -160,6 +185,24 @@ int pz_trace_paths_tangential(const pz_trace_path *a, const pz_trace_path *b, in
 pz_status pz_trace_snap_polyline(const pz_trace_graph *graph, const pz_mesh *mesh, const pz_topology *topology,
                                  const double *points, int32_t point_count, int closed, double tolerance_mm,
                                  const char *name, pz_trace_path *out, pz_ctx *ctx);
+
+/**
+ * A path through the given mesh vertices in order (vertices: count, each in
+ * range): consecutive vertices that share no edge are joined by the shortest
+ * edge path (3D length), consecutive repeats are dropped, and when a vertex
+ * comes back the stretch since its first visit is cut out, so no vertex
+ * appears twice. closed: the last vertex is joined back to the first (a
+ * closed result with fewer than 3 vertices becomes open). Arms: the graph's
+ * arm closest to the path's tangent. Kind PZ_TRACE_SKETCH; length_mm and cost
+ * (link weights where the graph has the link, else length times
+ * 1 + drift_weight) are filled. *out is overwritten (not freed first).
+ * Errors: PZ_ERR_DATA (a vertex out of range, or two vertices in different
+ * components), PZ_ERR_NOMEM. Used by pz_trace_snap_polyline and
+ * pz_symmetry_mirror_path.
+ */
+pz_status pz_trace_path_through(const pz_trace_graph *graph, const pz_mesh *mesh, const pz_topology *topology,
+                                const int32_t *vertices, int32_t count, int closed, pz_trace_path *out,
+                                pz_ctx *ctx);
 
 /** Frees one path's arrays and zeroes it. */
 void pz_trace_path_clear(pz_trace_path *path);

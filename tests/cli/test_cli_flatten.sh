@@ -51,7 +51,8 @@ assert sorted(set(groups)) == sorted("panel_%d" % k for k in range(panels)), "gr
 PY
 }
 
-# svg_checks WHAT DIR PANELS: pattern.svg parses, is sized in mm and has one group per panel.
+# svg_checks WHAT DIR PANELS: pattern.svg parses, is sized in mm, has the scale box and one piece group
+# per panel with a closed cut line, a closed sew line and a grainline.
 svg_checks() {
     check "$1: pattern.svg is not a 1:1 SVG with $3 panel groups" python3 - "$2/pattern.svg" "$3" <<'PY'
 import re, sys, xml.etree.ElementTree as ET
@@ -62,13 +63,16 @@ width, height = root.get('width'), root.get('height')
 assert width.endswith('mm') and height.endswith('mm')
 box = [float(x) for x in root.get('viewBox').split()]
 assert abs(box[2] - float(width[:-2])) < 1e-6 and abs(box[3] - float(height[:-2])) < 1e-6, "not 1 unit = 1 mm"
-ids = [g.get('id') for g in root.iter(ns + 'g')]
+pieces = [g for g in root.iter(ns + 'g') if g.get('class') == 'piece']
+ids = [g.get('id') for g in pieces]
 assert sorted(ids) == sorted("panel_%d" % k for k in range(int(sys.argv[2]))), ids
-for g in root.iter(ns + 'g'):
+assert any(g.get('id') == 'scale' for g in root.iter(ns + 'g')), "no 10 cm scale box"
+for g in pieces:
     classes = [p.get('class') for p in g.iter(ns + 'path')]
-    assert 'outline' in classes and 'grainline' in classes, classes
-    outline = [p for p in g.iter(ns + 'path') if p.get('class') == 'outline'][0].get('d')
-    assert outline.startswith('M') and outline.rstrip().endswith('Z')
+    assert 'cut' in classes and 'sew' in classes and 'grainline' in classes, classes
+    for kind in ('cut', 'sew'):
+        line = [p for p in g.iter(ns + 'path') if p.get('class') == kind][0].get('d')
+        assert line.startswith('M') and line.rstrip().endswith('Z'), kind
 PY
 }
 

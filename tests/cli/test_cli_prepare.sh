@@ -4,7 +4,9 @@
 # stays within the Hausdorff bound, comes out valid (`panelize check`);
 # --json reports every step with its counts; seams.json is a sketch file that
 # `panelize field --sketch` accepts; poses come out with the same connectivity;
-# --repair only welds and repairs; bad options and bad input (an empty file,
+# --repair only welds and repairs; `panelize run --prepare auto` welds an
+# unwelded 4-panel export (report.json's "prepare" object says so) and leaves
+# a clean mesh alone; bad options and bad input (an empty file,
 # nothing left after repair, an edge longer than the garment) fail with their
 # exit code, one line naming the culprit, and nothing written.
 #
@@ -12,6 +14,40 @@
 set -u
 
 source "$(dirname "$0")/lib.sh"
+
+# split_panels N IN OUT: an unwelded export of IN (as CLO3D writes one): its
+# faces cut into N sectors around the garment's height (its longest side) by
+# the angle of their centroids, every vertex copied once per sector it is in.
+split_panels() {
+    python3 - "$@" <<'PY'
+import math, sys
+sectors, v, f = int(sys.argv[1]), [], []
+for line in open(sys.argv[2]):
+    t = line.split()
+    if t and t[0] == 'v': v.append([float(x) for x in t[1:4]])
+    elif t and t[0] == 'f': f.append([int(c.split('/')[0]) - 1 for c in t[1:]])
+lo = [min(p[k] for p in v) for k in range(3)]
+hi = [max(p[k] for p in v) for k in range(3)]
+up = max(range(3), key=lambda k: hi[k] - lo[k])
+h0, h1 = [k for k in range(3) if k != up]
+centre = [(lo[k] + hi[k]) / 2 for k in range(3)]
+out_v, copy, faces = [], {}, []
+for face in f:
+    x = sum(v[i][h0] for i in face) / 3 - centre[h0]
+    y = sum(v[i][h1] for i in face) / 3 - centre[h1]
+    sector = int(math.floor((math.atan2(y, x) + math.pi) / (2 * math.pi / sectors))) % sectors
+    ids = []
+    for i in face:
+        if (i, sector) not in copy:
+            copy[(i, sector)] = len(out_v)
+            out_v.append(v[i])
+        ids.append(copy[(i, sector)] + 1)
+    faces.append(ids)
+with open(sys.argv[3], 'w') as out:
+    for p in out_v: out.write('v %r %r %r\n' % tuple(p))
+    for ids in faces: out.write('f %d %d %d\n' % tuple(ids))
+PY
+}
 
 run generate bodice -o bodice.obj --faces 12000 --poses 1 --quiet
 expect_ok "generate"
@@ -58,28 +94,7 @@ assert a == b and a[0] > 0
 PY
 
 # ------------------------------------------------------------------ unwelded panels: seams come back
-python3 - bodice.obj panels.obj <<'PY'
-import math, sys
-v, f = [], []
-for line in open(sys.argv[1]):
-    t = line.split()
-    if t and t[0] == 'v': v.append(t[1:4])
-    elif t and t[0] == 'f': f.append([int(c.split('/')[0]) - 1 for c in t[1:]])
-# split by the sign of x of each face's centroid: every vertex is copied per side
-out_v, copy, faces = [], {}, []
-for face in f:
-    side = sum(float(v[i][0]) for i in face) > 0
-    ids = []
-    for i in face:
-        if (i, side) not in copy:
-            copy[(i, side)] = len(out_v)
-            out_v.append(v[i])
-        ids.append(copy[(i, side)] + 1)
-    faces.append(ids)
-with open(sys.argv[2], 'w') as out:
-    for p in out_v: out.write('v %s %s %s\n' % tuple(p))
-    for ids in faces: out.write('f %d %d %d\n' % tuple(ids))
-PY
+split_panels 2 bodice.obj panels.obj
 run prepare panels.obj -o welded.obj --json --quiet
 expect_ok "prepare the unwelded panels"
 json_checks "welding" \
@@ -98,6 +113,34 @@ expect_ok "prepare --repair"
 json_checks "--repair" \
     "no remeshing" 'd["steps"]["remesh"]["ran"] is False and d["steps"]["decimate"]["ran"] is False' \
     "faces kept" 'd["counts"]["output_faces"] == d["counts"]["input_faces"]'
+
+# ------------------------------------------------------------------ run --prepare auto
+# The bodice split into 4 unwelded panels: `run` welds it back, says so in
+# report.json, and offers the 4 welded seams to the segmentation.
+split_panels 4 bodice.obj panels4.obj
+run run panels4.obj -o run-panels --quiet
+expect_ok "run on the unwelded 4-panel export"
+check "run wrote report.json" [ -s run-panels/report.json ]
+report_checks "run --prepare auto, unwelded" run-panels \
+    "mode auto" 'd["prepare"]["mode"] == "auto"' \
+    "the weld step ran" '[s for s in d["prepare"]["steps"] if s["name"] == "weld"][0]["ran"] is True' \
+    "welded seams offered" 'd["prepare"]["welded_seams"] >= 4' \
+    "not remeshed (small, well shaped)" '[s for s in d["prepare"]["steps"] if s["name"] == "remesh"][0]["ran"] is False' \
+    "faces kept" 'd["prepare"]["output_faces"] == d["prepare"]["input_faces"] == 12000' \
+    "one surface came out: panels were cut" 'd["summary"]["panel_count"] >= 2 and d["summary"]["injective"]'
+
+run run bodice.obj -o run-clean --quiet
+expect_ok "run on the clean bodice"
+report_checks "run --prepare auto, clean" run-clean \
+    "mode auto" 'd["prepare"]["mode"] == "auto"' \
+    "nothing changed" 'd["prepare"]["output_faces"] == d["prepare"]["input_faces"]' \
+    "no step ran" 'not any(s["ran"] for s in d["prepare"]["steps"])' \
+    "no welded seams" 'd["prepare"]["welded_seams"] == 0'
+
+run run panels4.obj -o run-off --prepare off --quiet
+expect_ok "run --prepare off"
+report_checks "run --prepare off" run-off \
+    "mode off, no steps" 'd["prepare"]["mode"] == "off" and "steps" not in d["prepare"]'
 
 # ------------------------------------------------------------------ errors
 rm -f seams.json

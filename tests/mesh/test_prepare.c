@@ -8,13 +8,17 @@
  *  - the bodice split into 4 unwelded panels welds back into one surface and
  *    its 4 seams come back as 4 curves lying on the panel borders, with or
  *    without remeshing;
+ *  - a dense bodice (unwelded, or with vertex noise) is decimated (thinning)
+ *    and remeshed to 4000 faces: valid, one piece, well shaped, within the
+ *    bound of the clean bodice, seams kept;
  *  - poses stay in correspondence: every pose has the output's vertices, and
  *    each lies within the bound of its own input pose;
  *  - automatic mode leaves a clean mesh alone and says why;
  *  - bad input: nothing left after repair, a target edge longer than the
  *    garment, an empty mesh: an error, *out NULL;
  *  - every shared garment (../shared/data/garments) passes through unchanged
- *    in shape (skipped without the data).
+ *    in shape, and the shared jumpsuit front's 3 poses stay in
+ *    correspondence, each within the bound (skipped without the data).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -291,6 +295,57 @@ static void test_unwelded_panels(void)
     pz_mesh_free(&clean);
 }
 
+/*
+ * Decimation: a dense bodice split into 4 unwelded panels, prepared to 4000
+ * faces, goes through thinning (and CGAL's edge collapse when thinning
+ * stalls); the output is valid, one piece, well shaped, within the bound of
+ * the clean bodice, and the 4 seams survive on the panel borders. Then the
+ * same with vertex noise (a scan's): thinning must not fold the surface.
+ */
+static void test_decimation(void)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    pz_mesh *clean = bodice(60000, 0, &ctx);
+    double centre[3], axis[3], bound = 0.005 * diagonal(clean);
+    pz_mesh *panels = unwelded_bodice(clean, centre, axis);
+    pz_mesh *noisy = NULL;
+    REQUIRE_OK(pz_mesh_copy(clean, &noisy, &ctx), ctx);
+    double edge = sqrt(4.0 * pz_geom_total_area(clean) / (sqrt(3.0) * clean->face_count));
+    uint32_t seed = 777;
+    for (int32_t i = 0; i < 3 * noisy->vertex_count; ++i)
+        noisy->positions[i] += 0.3 * edge * noise(&seed);
+    const pz_mesh *inputs[2] = {panels, noisy};
+    for (int i = 0; i < 2; ++i) {
+        pz_prepare_options options = {.target_faces = 4000};
+        pz_prepare_result *result = NULL;
+        REQUIRE_OK(pz_prepare(inputs[i], &options, &result, &ctx), ctx);
+        const pz_prepare_report *r = &result->report;
+        const char *what = i ? "noisy" : "unwelded";
+        CHECK(r->steps[PZ_PREPARE_DECIMATE].ran && strstr(r->steps[PZ_PREPARE_DECIMATE].detail, "thinning"),
+              "%s: decimation: '%s'", what, r->steps[PZ_PREPARE_DECIMATE].detail);
+        CHECK(r->decimated_faces > 4000 && r->decimated_faces < 3 * 2 * 4000, "%s: decimated to %d faces", what,
+              (int)r->decimated_faces);
+        CHECK(abs(result->mesh->face_count - 4000) < 600, "%s: %d faces, 4000 wanted", what,
+              (int)result->mesh->face_count);
+        CHECK(is_valid(result->mesh), "%s: invalid output", what);
+        CHECK(component_count(result->mesh) == 1, "%s: %d components", what, (int)component_count(result->mesh));
+        /* noisy: every turn of its jagged outline stays locked, with short edges beside it */
+        double shaped = well_shaped(result->mesh);
+        CHECK(shaped > (i ? 0.98 : 0.99), "%s: well shaped %.3f", what, shaped);
+        double d = distance_both_ways(result->mesh, result->mesh->positions, clean, clean->positions);
+        CHECK(d < bound, "%s: %.3f mm from the clean bodice, bound %.3f", what, d, bound);
+        CHECK(r->within_bound, "%s: report says out of bound (%.3f mm)", what, r->hausdorff);
+        if (i == 0)
+            check_seams(result, centre, axis);
+        pz_prepare_result_free(&result);
+    }
+    pz_mesh_free(&noisy);
+    pz_mesh_free(&panels);
+    pz_mesh_free(&clean);
+}
+
 static void test_poses(void)
 {
     pz_ctx ctx;
@@ -398,13 +453,55 @@ static void test_shared_garments(void)
     }
 }
 
+/* The shared jumpsuit front in 3 poses (../shared/data/multipose): one connectivity out, each pose within the bound. */
+static void test_shared_poses(void)
+{
+    const char *dir = test_shared_data();
+    if (!dir) {
+        printf("shared poses: skipped (no ../shared/data)\n");
+        return;
+    }
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    char path[4096];
+    pz_mesh *mesh = NULL, *pose = NULL;
+    snprintf(path, sizeof path, "%s/multipose/jumpsuit/front1.obj", dir);
+    REQUIRE_OK(pz_mesh_read(path, &mesh, &ctx), ctx);
+    for (int p = 2; p <= 3; ++p) {
+        snprintf(path, sizeof path, "%s/multipose/jumpsuit/front%d.obj", dir, p);
+        REQUIRE_OK(pz_mesh_read(path, &pose, &ctx), ctx);
+        REQUIRE(pose->vertex_count == mesh->vertex_count, "front%d: %d vertices", p, (int)pose->vertex_count);
+        REQUIRE_OK(pz_mesh_add_pose(mesh, pose->positions, &ctx), ctx);
+        pz_mesh_free(&pose);
+    }
+    pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, NULL);
+    pz_prepare_result *result = NULL;
+    REQUIRE_OK(pz_prepare(mesh, NULL, &result, &ctx), ctx);
+    const pz_mesh *out = result->mesh;
+    CHECK(out->pose_count == 2, "%d poses out of 2", (int)out->pose_count);
+    double bound = 0.005 * diagonal(mesh);
+    for (int32_t p = 0; p < out->pose_count; ++p) {
+        double d = distance_both_ways(out, out->poses + (size_t)p * out->vertex_count * 3, mesh,
+                                      mesh->poses + (size_t)p * mesh->vertex_count * 3);
+        CHECK(d < bound, "jumpsuit pose %d: %.3f mm from its input, bound %.3f", (int)p + 2, d, bound);
+    }
+    CHECK(result->report.within_bound, "jumpsuit: report says out of bound");
+    printf("jumpsuit front, 3 poses: %d -> %d faces, pose Hausdorff %.3f mm (bound %.3f)\n", (int)mesh->face_count,
+           (int)out->face_count, result->report.pose_hausdorff_max, bound);
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+}
+
 int main(void)
 {
     test_corrupted_bodice();
     test_unwelded_panels();
+    test_decimation();
     test_poses();
     test_automatic();
     test_bad_input();
     test_shared_garments();
+    test_shared_poses();
     return test_finish();
 }

@@ -15,8 +15,16 @@
  *  - open cylinder and cone (developable): E_ang and E_len below 1e-6 with
  *    both schemes; the cylinder's rulings (the default grain +z) run along
  *    +v;
- *  - a dangling feature curve (one wire-patch with a slit): E_len < 1e-9,
- *    constraints met, both schemes; the paper's 1/length interior weights;
+ *  - a dangling feature curve (one wire-patch with a slit), accessory and
+ *    key, both schemes: E_len < 1e-9, constraints met, no flipped face (the
+ *    folding past the tip is removed by giving up tip edges, flagged
+ *    best_effort, less than half the curve); a shorter dangling curve that
+ *    does not fold is kept whole; the paper's 1/length interior weights;
+ *  - a key curve with a user-given 2D shape (pz_feature_curve.turning):
+ *    the flattened curve turns by exactly the given angles (1e-9 rad),
+ *    straight, left and right, both schemes; without it the turning at
+ *    every interior curve vertex is pi - 2 pi alpha_left / (alpha_left +
+ *    alpha_right) (Eq. 1, the 3D angles measured on the mesh in the test);
  *  - bad input: a feature polyline off the mesh or across two panels, and
  *    a curve whose vertices share no edge are PZ_ERR_DATA with a one-line message; a closed
  *    feature loop inside a panel is PZ_ERR_DATA; a key curve set that
@@ -146,16 +154,42 @@ static void test_quarter_sphere(void)
           prog.e_ang);
 
     /* A dangling curve (pole to latitude 45): one wire-patch with a slit; the
-     * two nodes of each interior curve vertex must still sum to 2 pi. */
+     * two nodes of each interior curve vertex must still sum to 2 pi. Past
+     * the tip the compressed interior folds (2 faces); the tip's last edges
+     * are given up until nothing flips, flagged best effort. Accessory and
+     * key curves, both schemes. */
     pz_feature_curves *half = meridian_to(pattern, PZ_FEATURE_ACCESSORY, 45);
-    for (int scheme = 0; scheme < 2; ++scheme) {
+    int32_t half_edges = half->curves[0].vertex_count - 1;
+    for (int run = 0; run < 4; ++run) {
+        int scheme = run & 1;
+        half->curves[0].kind = run < 2 ? PZ_FEATURE_ACCESSORY : PZ_FEATURE_KEY;
         warp_figures slit = warp(pattern, scheme, half, NULL);
-        print_figures(scheme ? "quarter-sphere + dangling curve, progressive" : "quarter-sphere + dangling curve, global",
-                      &slit);
-        CHECK(slit.result.wire_patch_count == 1, "dangling: %d wire-patches", slit.result.wire_patch_count);
-        CHECK(slit.result.max_wire_error < 1e-9 && !slit.result.best_effort, "dangling: wire error %g, best effort %d",
-              slit.result.max_wire_error, slit.result.best_effort);
+        const pz_wirewarp_result *r = &slit.result;
+        char what[96];
+        snprintf(what, sizeof what, "quarter-sphere + dangling %s curve, %s", run < 2 ? "accessory" : "key",
+                 scheme ? "progressive" : "global");
+        print_figures(what, &slit);
+        printf("  %d of %d curve edges given up at the tip, %d interior vertices untangled\n",
+               r->trimmed_feature_edges, half_edges, r->untangled_vertices);
+        CHECK(r->wire_patch_count == 1, "%s: %d wire-patches", what, r->wire_patch_count);
+        CHECK(r->flipped_triangles == 0 && r->injective, "%s: %d flipped", what, r->flipped_triangles);
+        CHECK(r->max_wire_error < 1e-9 && r->constraint_residual < 1e-9, "%s: wire error %g, residual %g", what,
+              r->max_wire_error, r->constraint_residual);
+        CHECK(r->best_effort == (r->trimmed_feature_edges > 0), "%s: best effort %d with %d edges trimmed", what,
+              r->best_effort, r->trimmed_feature_edges);
+        CHECK(r->trimmed_feature_edges < half_edges / 2, "%s: %d of %d edges trimmed", what,
+              r->trimmed_feature_edges, half_edges);
+        if (run >= 2)
+            CHECK(r->locked_count > 0, "%s: key curve locked no angle", what);
     }
+    /* a dangling curve that does not fold (pole to latitude 30) is kept whole */
+    pz_feature_curves *short_curve = meridian_to(pattern, PZ_FEATURE_KEY, 30);
+    warp_figures whole = warp(pattern, 0, short_curve, NULL);
+    print_figures("quarter-sphere + dangling key curve to latitude 60, global", &whole);
+    CHECK(whole.result.trimmed_feature_edges == 0 && !whole.result.best_effort && whole.result.flipped_triangles == 0,
+          "short dangling curve: %d trimmed, %d flipped", whole.result.trimmed_feature_edges,
+          whole.result.flipped_triangles);
+    pz_feature_curves_free(&short_curve);
     pz_feature_curves_free(&half);
 
     /* The paper's 1/length interior weights (Eq. 11): wires unchanged. */
@@ -177,6 +211,99 @@ static void test_quarter_sphere(void)
     CHECK(key.result.locked_count >= curves->curves[0].vertex_count, "key meridian: %d locked",
           key.result.locked_count);
     CHECK(key.result.max_wire_error < 1e-9, "key meridian: wire error %g", key.result.max_wire_error);
+    pz_feature_curves_free(&curves);
+    pz_pattern_free(&pattern);
+    pz_mesh_free(&garment);
+}
+
+/* Signed turning angle of the 2D polyline at vertex i of the curve. */
+static double turn_2d(const double *uv, const int32_t *v, int32_t i)
+{
+    const double *a = uv + 2 * v[i - 1], *b = uv + 2 * v[i], *c = uv + 2 * v[i + 1];
+    double d1[2] = {b[0] - a[0], b[1] - a[1]}, d2[2] = {c[0] - b[0], c[1] - b[1]};
+    return atan2(d1[0] * d2[1] - d1[1] * d2[0], d1[0] * d2[0] + d1[1] * d2[1]);
+}
+
+/* Corner angles at v of the faces left of a -> v -> b (CCW around v from v->b to v->a); -1 if not found. */
+static double left_angle(const pz_mesh *mesh, int32_t a, int32_t v, int32_t b)
+{
+    double sum = 0;
+    for (int32_t from = b, steps = 0; from != a; ++steps) {
+        int32_t f = 0, k = 0;
+        for (f = 0; f < mesh->face_count; ++f) {
+            const int32_t *c = mesh->faces + 3 * f;
+            for (k = 0; k < 3 && !(c[k] == v && c[(k + 1) % 3] == from); ++k)
+                ;
+            if (k < 3)
+                break;
+        }
+        if (f == mesh->face_count || steps > 64)
+            return -1;
+        const int32_t *c = mesh->faces + 3 * f;
+        const double *p = mesh->positions + 3 * v, *x = mesh->positions + 3 * from,
+                     *y = mesh->positions + 3 * c[(k + 2) % 3];
+        double u[3], w[3], uu = 0, ww = 0, uw = 0;
+        for (int d = 0; d < 3; ++d) {
+            u[d] = x[d] - p[d];
+            w[d] = y[d] - p[d];
+            uu += u[d] * u[d];
+            ww += w[d] * w[d];
+            uw += u[d] * w[d];
+        }
+        sum += acos(fmax(-1, fmin(1, uw / sqrt(uu * ww))));
+        from = c[(k + 2) % 3];
+    }
+    return sum;
+}
+
+/* A key curve with a user-given 2D shape (wang2008 Sec. 2: the designer
+ * assigns the angles): the meridian of the quarter-sphere, drawn with a
+ * constant turn of +0.01 rad (left) or -0.01 rad per vertex, or straight.
+ * The 2D polyline's turning angles are those given (1e-9) and its edges keep
+ * their 3D lengths; without the turning array the angles are Eq. 1's. */
+static void test_key_curve_shape(void)
+{
+    pz_mesh *garment = generate(PZ_SHAPE_QUARTER_SPHERE, 2000, 0);
+    pz_pattern *pattern = pattern_from(garment, NULL);
+    pz_feature_curves *curves = meridian(pattern, PZ_FEATURE_KEY);
+    pz_feature_curve *curve = &curves->curves[0];
+    curve->turning = malloc((size_t)curve->vertex_count * sizeof(double));
+    REQUIRE(curve->turning, "out of memory");
+    static const double given[3] = {0.01, -0.01, 0};
+    for (int g = 0; g < 3; ++g)
+        for (int scheme = 0; scheme < 2; ++scheme) {
+            for (int32_t i = 0; i < curve->vertex_count; ++i)
+                curve->turning[i] = given[g];
+            double *uv = NULL;
+            warp_figures f = warp(pattern, scheme, curves, &uv);
+            double worst = 0;
+            for (int32_t i = 1; i + 1 < curve->vertex_count; ++i)
+                worst = fmax(worst, fabs(turn_2d(uv, curve->vertices, i) - given[g]));
+            printf("key meridian with turning %+.2f rad per vertex (%s): worst turning error %.2g rad, max wire error "
+                   "%.2g, E_ang %.4g, flipped %d, best effort %d\n",
+                   given[g], scheme ? "progressive" : "global", worst, f.result.max_wire_error, f.e_ang,
+                   f.result.flipped_triangles, f.result.best_effort);
+            CHECK(worst < 1e-9, "given turning %g: 2D turning off by %g rad", given[g], worst);
+            CHECK(f.result.max_wire_error < 1e-9 && !f.result.best_effort, "given turning %g: wire error %g",
+                  given[g], f.result.max_wire_error);
+            free(uv);
+        }
+    free(curve->turning);
+    curve->turning = NULL;
+    double *uv = NULL;
+    warp_figures eq1 = warp(pattern, 0, curves, &uv);
+    /* Eq. 1 at an interior vertex: theta_left = 2 pi alpha_left / (alpha_left + alpha_right), turn = pi - theta_left */
+    double worst = 0;
+    const int32_t *v = curve->vertices;
+    for (int32_t i = 1; i + 1 < curve->vertex_count; ++i) {
+        double left = left_angle(pattern->mesh, v[i - 1], v[i], v[i + 1]);
+        double right = left_angle(pattern->mesh, v[i + 1], v[i], v[i - 1]);
+        REQUIRE(left > 0 && right > 0, "curve vertex %d: no star", (int)i);
+        worst = fmax(worst, fabs(turn_2d(uv, v, i) - (TEST_PI - 2 * TEST_PI * left / (left + right))));
+    }
+    printf("key meridian by Eq. 1: worst 2D turning error against 2 pi alpha / sum alpha %.2g rad\n", worst);
+    CHECK(worst < 1e-9 && eq1.result.max_wire_error < 1e-9, "Eq. 1 turning off by %g rad", worst);
+    free(uv);
     pz_feature_curves_free(&curves);
     pz_pattern_free(&pattern);
     pz_mesh_free(&garment);
@@ -590,6 +717,7 @@ int main(void)
     pz_ctx_init(&ctx);
     ctx.quiet = 1;
     test_quarter_sphere();
+    test_key_curve_shape();
     test_bodice();
     test_hemisphere();
     test_developable(PZ_SHAPE_CYLINDER);

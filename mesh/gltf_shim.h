@@ -1,0 +1,49 @@
+/*
+ * mesh/gltf_shim.h -- the GLB writer for a coloured, textured garment with
+ * seam lines (garment.glb of the export stage), behind plain C. The function
+ * lives in mesh/gltf_shim.cpp (tinygltf stays in that one C++ file); only C
+ * types cross this header.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_GLTF_SHIM_H
+#define PZ_GLTF_SHIM_H
+
+#include "mesh.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** A garment to write as GLB. Arrays are borrowed. */
+typedef struct pz_glb_garment {
+    int32_t vertex_count;
+    const double *positions;      /* vertex_count x 3 (mm) */
+    const int32_t *vertex_group;  /* vertex_count: colour group (panel) of each vertex, >= 0 */
+    const double *texcoords;      /* vertex_count x 2, panelize's convention (v up; flipped for glTF), or NULL */
+    int32_t face_count;
+    const int32_t *faces;         /* face_count x 3 */
+    int32_t line_point_count;
+    const double *line_points;    /* line_point_count x 3: the seams' vertices */
+    int32_t line_index_count;     /* even: pairs of line_points indices, one segment each */
+    const int32_t *line_indices;
+    const char *name;             /* mesh and node name */
+} pz_glb_garment;
+
+/**
+ * Writes `garment` as GLB to an open stream: one mesh with a TRIANGLES
+ * primitive (POSITION with min/max, NORMAL (area-weighted), COLOR_0 = the
+ * 12-colour palette of pz_glb_write by vertex_group, stored linear,
+ * TEXCOORD_0 when given) under a white double-sided material, and a LINES
+ * primitive for the seams (when line_index_count > 0) under a dark one.
+ * `what` names the output in messages. Errors: PZ_ERR_INVALID_MESH for
+ * indices out of range or non-finite coordinates, PZ_ERR_CREATE when the
+ * stream fails, PZ_ERR_NOMEM.
+ */
+pz_status pz_glb_write_garment(const pz_glb_garment *garment, FILE *file, const char *what, pz_ctx *ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PZ_GLTF_SHIM_H */

@@ -1,0 +1,100 @@
+/*
+ * segment/internal.h -- the layout state shared by segment/layout.c (panels,
+ * evaluation cache, path insertion, result), segment/fallback.c (the cut
+ * through a panel's worst vertex) and segment/removal.c (segments, removal,
+ * darts). Not part of the public interface.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_SEGMENT_INTERNAL_H
+#define PZ_SEGMENT_INTERNAL_H
+
+#include "segment/segment.h"
+
+/* One inserted path: its copy and whether it is a sketch (never removed). */
+typedef struct seg_path {
+    pz_trace_path path;
+    int sketch;
+} seg_path;
+
+/* One cached evaluation: key 0 = empty slot. */
+typedef struct seg_cache_entry {
+    uint64_t key;
+    pz_goal_result goals;
+} seg_cache_entry;
+
+/* A maximal chain of cut edges between nodes (vertices whose cut degree is not 2, or on the border). */
+typedef struct seg_segment {
+    int32_t edge_count;
+    int32_t *edges;        /* edge_count, in walking order */
+    int32_t *vertices;     /* edge_count + 1 (closed: last == first) */
+    int closed;
+    int32_t owner;         /* the inserted path that cut its first edge (insertion order), -1 unknown */
+    int sketch;
+} seg_segment;
+
+typedef struct seg_segments {
+    int32_t count;
+    seg_segment *items;
+} seg_segments;
+
+typedef struct seg_layout {
+    const pz_mesh *mesh;
+    const pz_topology *topology;
+    const pz_field *field;
+    const pz_segment_options *options;
+    pz_goal_options goals;
+    int threads;
+    int32_t max_candidates, max_depth;
+    pz_trace_graph *graph;
+    pz_symmetry symmetry;
+    /* Vertex -> incident edges (CSR), for edge lookups and cut degrees. */
+    int32_t *vertex_edge_offsets, *vertex_edges;
+    uint8_t *edge_cut;
+    int32_t *edge_owner;   /* edge_count: the inserted path that first cut it, -1 */
+    seg_path *paths;
+    int32_t path_count, path_capacity;
+    /* Panels of the current cut flags (labels_valid = 0 once a flag changes: seg_label_panels relabels). */
+    int labels_valid;
+    int32_t *face_panel;
+    int32_t panel_count;
+    int32_t *panel_offsets;  /* panel_count + 1 */
+    int32_t *panel_faces;    /* face_count, each panel's faces increasing */
+    pz_goal_result *panel_goals;
+    uint8_t *panel_evaluated;
+    seg_cache_entry *cache;
+    int32_t cache_capacity, cache_count;
+    int32_t evaluation_count;
+    int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
+    double mean_edge;
+} seg_layout;
+
+/* layout.c */
+int32_t seg_edge_between(const seg_layout *layout, int32_t a, int32_t b);
+int32_t seg_cut_degree(const seg_layout *layout, int32_t v);
+pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx);
+/* Evaluates the panels with want[p] set (all when want is NULL), from the cache when it can. */
+pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *ctx);
+void seg_progress(seg_layout *layout, const char *stage);
+/* The edge of the mirror image of edge e (-1 none). */
+int32_t seg_mirror_edge(const seg_layout *layout, int32_t e);
+
+/* The graph arm of vertex v closest to direction d (tangent or not). */
+uint8_t seg_closest_arm(const pz_trace_graph *graph, int32_t v, const double d[3]);
+/* Inserts a path and, with a symmetry plane, its mirror image when it has one. */
+pz_status seg_insert_with_mirror(seg_layout *layout, const pz_trace_path *path, pz_ctx *ctx);
+/* 1 when panel p lies on the mirrored (positive) side of the plane: its mirror panel gets the cuts. */
+int seg_panel_mirrored_side(const seg_layout *layout, int32_t p);
+
+/* fallback.c */
+#define SEG_FALLBACK_ROUNDS 16
+#define SEG_FALLBACK_MAX_CUTS 256
+pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx);
+
+/* removal.c */
+pz_status seg_segments_build(const seg_layout *layout, seg_segments *out, pz_ctx *ctx);
+void seg_segments_clear(seg_segments *segments);
+pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx);
+pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx);
+
+#endif

@@ -1,0 +1,628 @@
+/*
+ * segment/removal.c -- the last two steps of the layout (pietroni2022
+ * Sec. 4.2): removal of redundant path segments and darts.
+ *
+ * Segments: the cut edges split at *nodes*, the vertices on the garment's
+ * border or where the number of cut edges is not 2 (junctions and tips);
+ * a cycle of cut edges without a node is one closed segment.
+ *
+ * Removal: in reverse insertion order (a segment's order is the latest
+ * inserted path among its edges), sketched segments never, the segments on
+ * the symmetry plane last (Sec. 4.2, "Symmetry"), each segment is uncut
+ * together with its mirror image; the removal is kept when every panel it
+ * touches still meets the goals. Neither a removal nor a dart is tried next
+ * to a panel that already fails on strain or injectivity (re-gluing only
+ * adds faces to it). A removal that would leave a cut ending
+ * inside a panel (a T-junction stub) is skipped: such partial seams are the
+ * darts' business. Passes repeat (at most REMOVAL_PASSES) while one removes
+ * something, since a removal merges its neighbours into longer segments.
+ *
+ * Darts: the remaining segments between two panels (not a panel and
+ * itself, not their own mirror image), ordered by the angle defect of the
+ * region they span (positive, low first; saddles last: Fig. 10), are split into DART_PIECES
+ * sub-paths; the segment is re-glued from its end of lower curvature, and the
+ * dart kept is the one glued furthest for which every panel touched meets
+ * the goals. The part left open is a slit whose free end is the dart tip.
+ * Limits (Sec. 3.1): the open part at least DART_MIN_PIECES pieces and at
+ * most DART_MAX_EXTENT_FRACTION of the merged panel's extent (its
+ * bounding-box diagonal: "the dart length usually should not exceed a
+ * fraction of the patch length"), and every dart of the panel opening by at
+ * least DART_MIN_OPENING_DEG in the flattening ("opening angles sufficiently
+ * large"). A dart adds no corner (segment/goals.c), so re-gluing part of a
+ * seam is judged on strain and injectivity, as a pattern maker would.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "segment/internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define REMOVAL_PASSES 3
+#define DART_PIECES 8
+#define DART_MIN_PIECES 2
+#define DART_MAX_EXTENT_FRACTION 0.5
+/* A dart opening by less takes in under 3.5 mm per 10 cm of its length: not worth sewing. */
+#define DART_MIN_OPENING_DEG 2.0
+/* No dart is tried along a segment whose fully re-glued panel strains by more than this times S. */
+#define DART_MAX_RELIEF 2.0
+
+static pz_status nomem(pz_ctx *ctx)
+{
+    return pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
+}
+
+static int32_t other_end(const seg_layout *layout, int32_t e, int32_t v)
+{
+    int32_t h = layout->topology->edge_halfedge[2 * e];
+    int32_t a = pz_he_from(layout->topology, h);
+    return a == v ? pz_he_to(layout->topology, h) : a;
+}
+
+static int is_node(const seg_layout *layout, int32_t v)
+{
+    return layout->topology->vertex_on_boundary[v] || seg_cut_degree(layout, v) != 2;
+}
+
+/* The unvisited cut edge at v, or -1. */
+static int32_t next_cut_edge(const seg_layout *layout, int32_t v, const uint8_t *visited)
+{
+    for (int32_t i = layout->vertex_edge_offsets[v]; i < layout->vertex_edge_offsets[v + 1]; ++i) {
+        int32_t e = layout->vertex_edges[i];
+        if (layout->edge_cut[e] && !visited[e])
+            return e;
+    }
+    return -1;
+}
+
+/* Walks a chain from v along edge e until a node (or back to the start); appends it to out. */
+static int walk_segment(const seg_layout *layout, int32_t v, int32_t e, uint8_t *visited, seg_segment *out)
+{
+    int32_t capacity = 16, start = v;
+    out->edges = malloc((size_t)capacity * sizeof(int32_t));
+    out->vertices = malloc(((size_t)capacity + 1) * sizeof(int32_t));
+    if (!out->edges || !out->vertices)
+        return 0;
+    out->vertices[0] = v;
+    out->owner = -1;
+    while (e >= 0) {
+        if (out->edge_count == capacity) {
+            capacity *= 2;
+            int32_t *edges = realloc(out->edges, (size_t)capacity * sizeof(int32_t));
+            int32_t *vertices = edges ? realloc(out->vertices, ((size_t)capacity + 1) * sizeof(int32_t)) : NULL;
+            if (edges)
+                out->edges = edges;
+            if (vertices)
+                out->vertices = vertices;
+            if (!edges || !vertices)
+                return 0;
+        }
+        visited[e] = 1;
+        int32_t owner = layout->edge_owner[e];
+        if (owner > out->owner)
+            out->owner = owner;
+        if (owner >= 0 && layout->paths[owner].sketch)
+            out->sketch = 1;
+        out->edges[out->edge_count++] = e;
+        v = other_end(layout, e, v);
+        out->vertices[out->edge_count] = v;
+        if (v == start) {
+            out->closed = 1;
+            break;
+        }
+        e = is_node(layout, v) ? -1 : next_cut_edge(layout, v, visited);
+    }
+    return 1;
+}
+
+static int append_segment(seg_segments *out, int32_t *capacity)
+{
+    if (out->count < *capacity)
+        return 1;
+    *capacity = *capacity ? 2 * *capacity : 32;
+    seg_segment *grown = realloc(out->items, (size_t)*capacity * sizeof(seg_segment));
+    if (!grown)
+        return 0;
+    out->items = grown;
+    return 1;
+}
+
+pz_status seg_segments_build(const seg_layout *layout, seg_segments *out, pz_ctx *ctx)
+{
+    out->count = 0;
+    out->items = NULL;
+    const pz_topology *t = layout->topology;
+    uint8_t *visited = calloc((size_t)t->edge_count + 1, 1);
+    if (!visited)
+        return nomem(ctx);
+    int32_t capacity = 0;
+    int ok = 1;
+    /* Chains from nodes first, then the cycles that have none; vertex and edge order keep it deterministic. */
+    for (int pass = 0; pass < 2 && ok; ++pass)
+        for (int32_t v = 0; v < t->vertex_count && ok; ++v) {
+            if (pass == 0 && !is_node(layout, v))
+                continue;
+            for (int32_t e; ok && (e = next_cut_edge(layout, v, visited)) >= 0;) {
+                if (!(ok = append_segment(out, &capacity)))
+                    break;
+                seg_segment *s = out->items + out->count++;
+                memset(s, 0, sizeof *s);
+                ok = walk_segment(layout, v, e, visited, s);
+            }
+        }
+    free(visited);
+    if (!ok) {
+        seg_segments_clear(out);
+        return nomem(ctx);
+    }
+    return PZ_OK;
+}
+
+void seg_segments_clear(seg_segments *segments)
+{
+    for (int32_t i = 0; i < segments->count; ++i) {
+        free(segments->items[i].edges);
+        free(segments->items[i].vertices);
+    }
+    free(segments->items);
+    segments->items = NULL;
+    segments->count = 0;
+}
+
+/* ---------------------------------------------------------------- edit sets */
+
+/* A set of edges changed together (a segment or part of it, plus its mirror image). */
+typedef struct edge_set {
+    int32_t count;
+    int32_t *edges;
+} edge_set;
+
+/* edges[0..n-1] and, with symmetry, their mirror images that are cut and not sketched. */
+static int edge_set_make(const seg_layout *layout, const int32_t *edges, int32_t n, edge_set *out)
+{
+    out->count = 0;
+    out->edges = malloc((size_t)2 * n * sizeof(int32_t) + 1);
+    if (!out->edges)
+        return 0;
+    for (int32_t i = 0; i < n; ++i)
+        out->edges[out->count++] = edges[i];
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t m = seg_mirror_edge(layout, edges[i]);
+        if (m < 0 || !layout->edge_cut[m] || (layout->edge_owner[m] >= 0 && layout->paths[layout->edge_owner[m]].sketch))
+            continue;
+        int seen = 0;
+        for (int32_t j = 0; j < out->count && !seen; ++j)
+            seen = out->edges[j] == m;
+        if (!seen)
+            out->edges[out->count++] = m;
+    }
+    return 1;
+}
+
+static void edge_set_apply(seg_layout *layout, const edge_set *set, uint8_t cut)
+{
+    for (int32_t i = 0; i < set->count; ++i)
+        layout->edge_cut[set->edges[i]] = cut;
+    layout->labels_valid = 0;
+}
+
+/* 1 when, with the set uncut, some inner vertex keeps exactly one cut edge (a stub). */
+static int leaves_stub(seg_layout *layout, const edge_set *set)
+{
+    const pz_topology *t = layout->topology;
+    int labels_valid = layout->labels_valid; /* the flags come back as they were */
+    edge_set_apply(layout, set, 0);
+    int stub = 0;
+    for (int32_t i = 0; i < set->count && !stub; ++i) {
+        int32_t h = t->edge_halfedge[2 * set->edges[i]];
+        int32_t ends[2] = {pz_he_from(t, h), pz_he_to(t, h)};
+        for (int k = 0; k < 2 && !stub; ++k)
+            stub = !t->vertex_on_boundary[ends[k]] && seg_cut_degree(layout, ends[k]) == 1;
+    }
+    edge_set_apply(layout, set, 1);
+    layout->labels_valid = labels_valid;
+    return stub;
+}
+
+/* Relabels and evaluates the panels next to the set's edges; *ok = 1 when none fails a goal in `mask`. */
+static pz_status panels_pass(seg_layout *layout, const edge_set *set, unsigned mask, int *ok, pz_ctx *ctx)
+{
+    *ok = 0;
+    pz_status status = seg_label_panels(layout, ctx);
+    if (status)
+        return status;
+    uint8_t *want = calloc((size_t)layout->panel_count + 1, 1);
+    if (!want)
+        return nomem(ctx);
+    const pz_topology *t = layout->topology;
+    for (int32_t i = 0; i < set->count; ++i)
+        for (int s = 0; s < 2; ++s) {
+            int32_t h = t->edge_halfedge[2 * set->edges[i] + s];
+            if (h >= 0)
+                want[layout->face_panel[pz_he_face(h)]] = 1;
+        }
+    status = seg_evaluate_panels(layout, want, ctx);
+    *ok = !status;
+    for (int32_t p = 0; p < layout->panel_count && *ok; ++p)
+        if (want[p] && (layout->panel_goals[p].failures & mask))
+            *ok = 0;
+    free(want);
+    return status;
+}
+
+static pz_status panels_ok(seg_layout *layout, const edge_set *set, int *ok, pz_ctx *ctx)
+{
+    return panels_pass(layout, set, ~0u, ok, ctx);
+}
+
+/*
+ * *worth = 0 when a panel next to the set already fails on strain or
+ * injectivity: re-gluing only adds faces to it, so the trial would fail (with
+ * unreachable goals, S = 0, this spares a flattening per segment).
+ */
+static pz_status worth_trying(seg_layout *layout, const edge_set *set, int *worth, pz_ctx *ctx)
+{
+    return panels_pass(layout, set, PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE, worth, ctx);
+}
+
+/* ---------------------------------------------------------------- removal */
+
+static int on_plane(const seg_layout *layout, const seg_segment *s)
+{
+    if (!layout->symmetry.found)
+        return 0;
+    for (int32_t i = 0; i <= s->edge_count; ++i)
+        if (layout->symmetry.vertex_side[s->vertices[i]] != 1)
+            return 0;
+    return 1;
+}
+
+static const seg_layout *sort_layout;
+static const seg_segments *sort_segments;
+
+/* Removal order: off-plane before on-plane, then latest inserted first, then by first edge. */
+static int compare_removal(const void *l, const void *r)
+{
+    const seg_segment *a = sort_segments->items + *(const int32_t *)l, *b = sort_segments->items + *(const int32_t *)r;
+    int pa = on_plane(sort_layout, a), pb = on_plane(sort_layout, b);
+    if (pa != pb)
+        return pa - pb;
+    if (a->owner != b->owner)
+        return a->owner > b->owner ? -1 : 1;
+    return (a->edges[0] > b->edges[0]) - (a->edges[0] < b->edges[0]);
+}
+
+static int all_cut(const seg_layout *layout, const seg_segment *s)
+{
+    for (int32_t i = 0; i < s->edge_count; ++i)
+        if (!layout->edge_cut[s->edges[i]])
+            return 0;
+    return 1;
+}
+
+/* Tries to uncut segment s (with its mirror); *removed = 1 when kept uncut. */
+static pz_status try_remove(seg_layout *layout, const seg_segment *s, int *removed, pz_ctx *ctx)
+{
+    *removed = 0;
+    edge_set set;
+    if (!edge_set_make(layout, s->edges, s->edge_count, &set))
+        return nomem(ctx);
+    int worth = 0;
+    pz_status status = leaves_stub(layout, &set) ? PZ_OK : worth_trying(layout, &set, &worth, ctx);
+    if (!status && worth) {
+        int ok = 0;
+        edge_set_apply(layout, &set, 0);
+        status = panels_ok(layout, &set, &ok, ctx);
+        if (!status && !ok) {
+            edge_set_apply(layout, &set, 1);
+            status = seg_label_panels(layout, ctx);
+        }
+        *removed = ok && !status;
+    }
+    free(set.edges);
+    return status;
+}
+
+pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
+{
+    *removed = 0;
+    pz_status status = PZ_OK;
+    for (int pass = 0; pass < REMOVAL_PASSES && !status; ++pass) {
+        seg_segments segments;
+        if ((status = seg_segments_build(layout, &segments, ctx)))
+            break;
+        int32_t *order = malloc(((size_t)segments.count + 1) * sizeof(int32_t));
+        if (!order) {
+            seg_segments_clear(&segments);
+            return nomem(ctx);
+        }
+        for (int32_t i = 0; i < segments.count; ++i)
+            order[i] = i;
+        sort_layout = layout;
+        sort_segments = &segments;
+        qsort(order, (size_t)segments.count, sizeof(int32_t), compare_removal);
+        int32_t before = *removed;
+        for (int32_t i = 0; i < segments.count && !status; ++i) {
+            const seg_segment *s = segments.items + order[i];
+            if (s->sketch || !all_cut(layout, s))
+                continue;
+            int done = 0;
+            status = try_remove(layout, s, &done, ctx);
+            if (done) {
+                ++*removed;
+                seg_progress(layout, "remove");
+            }
+        }
+        free(order);
+        seg_segments_clear(&segments);
+        if (*removed == before)
+            break;
+    }
+    if (!status)
+        status = seg_label_panels(layout, ctx);
+    return status;
+}
+
+/* ---------------------------------------------------------------- darts */
+
+typedef struct dart_order {
+    int32_t segment;
+    double defect;  /* angle defect summed over the segment's inner vertices */
+} dart_order;
+
+static int compare_darts(const void *l, const void *r)
+{
+    const dart_order *a = l, *b = r;
+    int saddle_a = a->defect < 0, saddle_b = b->defect < 0;
+    if (saddle_a != saddle_b)
+        return saddle_a - saddle_b;
+    double ka = fabs(a->defect), kb = fabs(b->defect);
+    if (ka != kb)
+        return ka < kb ? -1 : 1;
+    return (a->segment > b->segment) - (a->segment < b->segment);
+}
+
+/*
+ * The Gaussian curvature of the region a segment spans (Sec. 4.2): the angle
+ * defect summed over the inner vertices of the segment and of their one-ring,
+ * each once (mark: vertex_count flags, left cleared). The ring smooths the
+ * vertex-scale noise of the defect along a path on mesh edges.
+ */
+static double band_defect(const seg_layout *layout, const double *defect, const seg_segment *s, uint8_t *mark,
+                          int32_t *visited)
+{
+    int32_t count = 0;
+    double sum = 0;
+    for (int32_t i = 0; i <= s->edge_count; ++i) {
+        int32_t v = s->vertices[i];
+        for (int32_t j = layout->vertex_edge_offsets[v] - 1; j < layout->vertex_edge_offsets[v + 1]; ++j) {
+            int32_t u = j < layout->vertex_edge_offsets[v] ? v : other_end(layout, layout->vertex_edges[j], v);
+            if (mark[u])
+                continue;
+            mark[u] = 1;
+            visited[count++] = u;
+            if (!layout->topology->vertex_on_boundary[u])
+                sum += defect[u];
+        }
+    }
+    for (int32_t i = 0; i < count; ++i)
+        mark[visited[i]] = 0;
+    return sum;
+}
+
+static double defect_sum(const seg_layout *layout, const double *defect, const int32_t *vertices, int32_t n)
+{
+    double sum = 0;
+    for (int32_t i = 0; i < n; ++i)
+        if (!layout->topology->vertex_on_boundary[vertices[i]])
+            sum += defect[vertices[i]];
+    return sum;
+}
+
+/* Bounding-box diagonal of panels a and b together (the panel they make once re-glued). */
+static double merged_extent(const seg_layout *layout, int32_t a, int32_t b)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int side = 0; side < 2; ++side) {
+        int32_t p = side ? b : a;
+        for (int32_t i = layout->panel_offsets[p]; i < layout->panel_offsets[p + 1]; ++i)
+            for (int c = 0; c < 3; ++c) {
+                const double *x = layout->mesh->positions + 3 * layout->topology->faces[3 * layout->panel_faces[i] + c];
+                for (int k = 0; k < 3; ++k) {
+                    lo[k] = fmin(lo[k], x[k]);
+                    hi[k] = fmax(hi[k], x[k]);
+                }
+            }
+    }
+    return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+static double edges_length(const seg_layout *layout, const int32_t *edges, int32_t n)
+{
+    double sum = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t h = layout->topology->edge_halfedge[2 * edges[i]];
+        const double *a = layout->mesh->positions + 3 * pz_he_from(layout->topology, h);
+        const double *b = layout->mesh->positions + 3 * pz_he_to(layout->topology, h);
+        sum += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+    }
+    return sum;
+}
+
+/* A segment can become a dart when it is open, long enough and neither end is a tip already. */
+static int dart_candidate(const seg_layout *layout, const seg_segment *s)
+{
+    if (s->sketch || s->closed || s->edge_count < 2 * DART_MIN_PIECES || !all_cut(layout, s))
+        return 0;
+    const pz_topology *t = layout->topology;
+    int32_t ends[2] = {s->vertices[0], s->vertices[s->edge_count]};
+    for (int k = 0; k < 2; ++k)
+        if (!t->vertex_on_boundary[ends[k]] && seg_cut_degree(layout, ends[k]) < 3)
+            return 0;
+    /* A seam between a panel and itself (a tube's opening) closes into a ring when re-glued. */
+    int32_t h = t->edge_halfedge[2 * s->edges[0]], g = t->edge_halfedge[2 * s->edges[0] + 1];
+    if (g < 0 || layout->face_panel[pz_he_face(h)] == layout->face_panel[pz_he_face(g)])
+        return 0;
+    /* A segment that is its own mirror image would be re-glued from both ends at once: a slit with two
+     * tips, no dart. */
+    int32_t mirror = seg_mirror_edge(layout, s->edges[0]);
+    for (int32_t i = 0; mirror >= 0 && i < s->edge_count; ++i)
+        if (s->edges[i] == mirror)
+            return 0;
+    return 1;
+}
+
+/* The edges of segment s oriented from its end of lower angle defect (the end re-glued first). */
+static void orient_from_low_end(const seg_layout *layout, const seg_segment *s, const double *defect, int32_t *edges)
+{
+    int32_t n = s->edge_count, half = (n + 1) / 2;
+    int reverse = defect_sum(layout, defect, s->vertices + n - half + 1, half) <
+                  defect_sum(layout, defect, s->vertices, half);
+    for (int32_t i = 0; i < n; ++i)
+        edges[i] = reverse ? s->edges[n - 1 - i] : s->edges[i];
+}
+
+/*
+ * Re-glues edges[0..glued-1] (with their mirror images), evaluates the panels
+ * touched and puts the flags back: *ok = 1 when every such panel meets the
+ * goals; *probe = the goals of the panel holding edge probe_edge.
+ */
+static pz_status measure_glued(seg_layout *layout, const int32_t *edges, int32_t glued, int32_t probe_edge, int *ok,
+                               pz_goal_result *probe, pz_ctx *ctx)
+{
+    edge_set set;
+    if (!edge_set_make(layout, edges, glued, &set))
+        return nomem(ctx);
+    edge_set_apply(layout, &set, 0);
+    pz_status status = panels_ok(layout, &set, ok, ctx);
+    if (!status)
+        *probe = layout->panel_goals[layout->face_panel[pz_he_face(layout->topology->edge_halfedge[2 * probe_edge])]];
+    edge_set_apply(layout, &set, 1);
+    free(set.edges);
+    return status;
+}
+
+/*
+ * 0 when the fully re-glued segment (goals `full`: the removal's trial,
+ * cached) tells that no dart along it can meet the goals: its panel is no
+ * disk or has too many corners (a dart adds no corner, so every dart along
+ * the segment leaves the same corners), or its strain exceeds
+ * DART_MAX_RELIEF times S (a dart relieves part of the strain of the glued
+ * seam, not all of it: on the 8 shared garments and the generated bodice
+ * every dart made had a fully glued strain within 1.21 S, and the trials
+ * above 2 S, a quarter of those flattened, made none).
+ */
+static int dart_hopeful(const seg_layout *layout, const pz_goal_result *full)
+{
+    return !(full->failures & (PZ_GOAL_NOT_DISK | PZ_GOAL_CORNERS)) &&
+           full->max_abs_strain <= DART_MAX_RELIEF * layout->goals.max_strain;
+}
+
+/*
+ * Re-glues segment s from its lower-curvature end (Sec. 4.2) and keeps the
+ * dart glued furthest that meets the goals; *made = 1 when one is kept.
+ * The candidate lengths go from the shortest dart to the longest: the first
+ * that passes is the one the paper's progressive re-gluing reaches when
+ * the goals hold all the way, and a panel held together by a small glued
+ * piece (a long dart) flattens badly in a few iterations from the LSCM
+ * start, which would stop the progressive re-gluing at its first step
+ * (measured: strain 0.2-0.5 there on the generated skirt). Darts longer than
+ * DART_MAX_EXTENT_FRACTION of the merged panel's extent are not evaluated.
+ */
+static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double *defect, int *made, pz_ctx *ctx)
+{
+    *made = 0;
+    int32_t n = s->edge_count, pieces = n < DART_PIECES ? n : DART_PIECES;
+    int32_t *edges = malloc((size_t)n * sizeof(int32_t));
+    if (!edges)
+        return nomem(ctx);
+    orient_from_low_end(layout, s, defect, edges);
+    edge_set whole;
+    if (!edge_set_make(layout, edges, n, &whole)) {
+        free(edges);
+        return nomem(ctx);
+    }
+    int worth = 0;
+    pz_status status = worth_trying(layout, &whole, &worth, ctx);
+    free(whole.edges);
+    const pz_topology *t = layout->topology;
+    double max_leg = 0;
+    if (!status && worth) {
+        int32_t a = layout->face_panel[pz_he_face(t->edge_halfedge[2 * edges[0]])];
+        int32_t b = layout->face_panel[pz_he_face(t->edge_halfedge[2 * edges[0] + 1])];
+        max_leg = DART_MAX_EXTENT_FRACTION * merged_extent(layout, a, b);
+    }
+    pz_goal_result goals;
+    int ok = 0;
+    if (!status && worth && !(status = measure_glued(layout, edges, n, edges[0], &ok, &goals, ctx)))
+        worth = dart_hopeful(layout, &goals);
+    int32_t best = 0;
+    for (int32_t k = pieces - DART_MIN_PIECES; worth && k >= 1 && !status && best == 0; --k) {
+        int32_t glued = (int32_t)((int64_t)k * n / pieces);
+        if (edges_length(layout, edges + glued, n - glued) > max_leg)
+            break; /* longer still for smaller k */
+        if ((status = measure_glued(layout, edges, glued, edges[glued], &ok, &goals, ctx)))
+            break;
+        if (ok && (goals.darts == 0 || goals.min_dart_opening_deg >= DART_MIN_OPENING_DEG))
+            best = glued;
+        if (goals.failures & PZ_GOAL_NOT_DISK)
+            break; /* the merged panel's topology does not depend on the dart's length */
+    }
+    if (!status && best > 0) {
+        edge_set set;
+        if (!edge_set_make(layout, edges, best, &set)) {
+            status = nomem(ctx);
+        } else {
+            edge_set_apply(layout, &set, 0);
+            free(set.edges);
+            *made = 1;
+        }
+    }
+    free(edges);
+    if (!status)
+        status = seg_label_panels(layout, ctx);
+    return status;
+}
+
+pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
+{
+    *darts = 0;
+    double *defect = malloc((size_t)layout->mesh->vertex_count * sizeof(double) + 1);
+    if (!defect)
+        return nomem(ctx);
+    pz_geom_angle_defect(layout->mesh, layout->topology, defect);
+    seg_segments segments;
+    pz_status status = seg_segments_build(layout, &segments, ctx);
+    dart_order *order = status ? NULL : malloc(((size_t)segments.count + 1) * sizeof(dart_order));
+    int32_t vertex_count = layout->topology->vertex_count;
+    uint8_t *mark = calloc((size_t)vertex_count + 1, 1);
+    int32_t *visited = malloc(((size_t)vertex_count + 1) * sizeof(int32_t));
+    if (!status && (!order || !mark || !visited))
+        status = nomem(ctx);
+    for (int32_t i = 0; !status && i < segments.count; ++i) {
+        order[i].segment = i;
+        order[i].defect = band_defect(layout, defect, segments.items + i, mark, visited);
+    }
+    if (!status)
+        qsort(order, (size_t)segments.count, sizeof(dart_order), compare_darts);
+    for (int32_t i = 0; !status && i < segments.count; ++i) {
+        const seg_segment *s = segments.items + order[i].segment;
+        if (!dart_candidate(layout, s))
+            continue;
+        int made = 0;
+        status = try_dart(layout, s, defect, &made, ctx);
+        if (made) {
+            ++*darts;
+            /* From the cache (the trial evaluated them): the progress shows their strain. */
+            status = seg_evaluate_panels(layout, NULL, ctx);
+            seg_progress(layout, "darts");
+        }
+    }
+    free(order);
+    free(mark);
+    free(visited);
+    seg_segments_clear(&segments);
+    free(defect);
+    return status;
+}

@@ -1,0 +1,53 @@
+#!/usr/bin/env bash
+# tests/cli/test_cli_run_garments.sh -- `panelize run` on every garment in
+# ../shared/data/garments (skipped when the folder is missing): every panel a
+# disk with at most 8 corners, every triangle's strain within +-5%, no flip
+# or boundary self-intersection, seams' sides within 0.5%; and `--panels uv`
+# on the DiffAvatar T-shirt goes through the whole run with its 4 true panels.
+# Prints one table line per garment (faces, panels, darts, worst strain, worst
+# seam mismatch, seconds) for the record.
+#
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -u
+
+source "$(dirname "$0")/lib.sh"
+
+DATA=${PZ_SHARED_DATA:-}
+if [ -z "$DATA" ] || [ ! -f "$DATA/INVENTORY.md" ]; then
+    echo "SKIPPED: no shared data (PZ_SHARED_DATA=$DATA)"
+    exit 77
+fi
+
+for garment in "$DATA"/garments/*.obj "$DATA"/garments/*.ply; do
+    name=$(basename "$garment")
+    out=run-${name%.*}
+    start=$(date +%s%N)
+    run run "$garment" -o "$out" --quiet
+    seconds=$(( ($(date +%s%N) - start) / 1000000 ))e-3
+    check "run $name: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]
+    [ "$rc" -eq 0 ] || continue
+    python3 - "$out/report.json" "$name" "$seconds" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+s = d['summary']
+print('%-28s faces %6d panels %3d darts %2d worst strain %.4f worst seam mismatch %.5f %6.2f s goals %s' % (
+    sys.argv[2], d['input']['faces'], s['panel_count'], len(d['darts']), s['max_abs_strain'],
+    s['max_seam_mismatch_rel'], float(sys.argv[3]), s['goals_met']))
+PY
+    report_checks "run $name" "$out" \
+        "goals not met: $(grep -o '"goals_reasons": "[^"]*' "$out/report.json" | head -c 300)" "d['summary']['goals_met'] is True" \
+        "not injective" "d['summary']['injective'] is True" \
+        "a panel has more than 8 corners" "all(p['corners'] <= 8 for p in d['panels'])" \
+        "a triangle's strain exceeds 0.05" "d['summary']['max_abs_strain'] <= 0.05 + 1e-9" \
+        "a seam's sides differ by more than 0.5%" "d['summary']['max_seam_mismatch_rel'] <= 0.005"
+done
+
+run run "$DATA/garments/diffavatar-tshirt.obj" --panels uv -o tshirt-uv --quiet
+expect_ok "run --panels uv diffavatar-tshirt"
+report_checks "run --panels uv diffavatar-tshirt" tshirt-uv \
+    "not the 4 true panels" "d['summary']['panel_count'] == 4" \
+    "segmentation ran" "d['segmentation']['panels'] == 'given'" \
+    "not injective" "d['summary']['injective'] is True" \
+    "a seam's sides differ by more than 0.5%" "d['summary']['max_seam_mismatch_rel'] <= 0.005"
+
+finish

@@ -1,0 +1,70 @@
+#!/usr/bin/env bash
+# tests/export/test_glb_validator.sh -- garment.glb passes the Khronos glTF
+# validator with zero errors: the GLBs test_glb writes when PZ_GLB_OUT is set
+# (a bodice in 4 panels with its marker texcoords and seam lines, and the
+# same with a mirrored pair). The validator setup is that of
+# tests/mesh/test_gltf_validator.sh (npm gltf-validator in .tools); without
+# it the test is skipped (exit 77), except with CI=true.
+#
+# SPDX-License-Identifier: GPL-3.0-or-later
+set -u
+
+source_dir=${PZ_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
+build_dir=${PZ_BUILD_DIR:-}
+validator="$source_dir/.tools/node_modules/gltf-validator"
+
+missing_tool() {
+    if [ "${CI:-}" = "true" ]; then
+        echo "FAIL: $1 (required when CI=true)"
+        exit 1
+    fi
+    echo "SKIPPED: $1"
+    exit 77
+}
+
+command -v node >/dev/null 2>&1 || missing_tool "node is not installed"
+[ -d "$validator" ] || missing_tool "gltf-validator not in $source_dir/.tools"
+if [ -z "$build_dir" ] || [ ! -x "$build_dir/test_glb" ]; then
+    echo "FAIL: test_glb not found in PZ_BUILD_DIR='$build_dir'"
+    exit 1
+fi
+
+work=$(mktemp -d "${TMPDIR:-/tmp}/pz_glb_validator.XXXXXX") || exit 1
+trap 'rm -rf "$work"' EXIT
+if ! PZ_GLB_OUT="$work" "$build_dir/test_glb" >"$work/test_glb.log" 2>&1; then
+    cat "$work/test_glb.log"
+    echo "FAIL: test_glb failed while writing the samples"
+    exit 1
+fi
+ls "$work"/*.glb >/dev/null 2>&1 || { echo "FAIL: test_glb wrote no GLB"; exit 1; }
+
+# Errors and warnings are listed; any error fails. Infos (e.g. unused data) are only counted.
+cat >"$work/validate.js" <<'JS'
+const fs = require('fs');
+const path = require('path');
+const validator = require(process.argv[2]);
+(async () => {
+  let failed = 0;
+  for (const file of process.argv.slice(3)) {
+    const report = await validator.validateBytes(new Uint8Array(fs.readFileSync(file)), {
+      uri: path.basename(file), maxIssues: 200,
+      externalResourceFunction: (uri) => Promise.reject(new Error('unexpected external resource ' + uri)),
+    });
+    const issues = report.issues;
+    console.log(`${path.basename(file)}: ${issues.numErrors} errors, ${issues.numWarnings} warnings, ` +
+                `${issues.numInfos} infos, ${issues.numHints} hints`);
+    for (const message of issues.messages)
+      if (message.severity <= 1)
+        console.log(`  ${message.severity === 0 ? 'error' : 'warning'} ${message.code} ${message.pointer || ''}: ` +
+                    message.message);
+    failed += issues.numErrors > 0;
+  }
+  process.exit(failed ? 1 : 0);
+})().catch((error) => { console.log('validator failed: ' + error); process.exit(1); });
+JS
+if node "$work/validate.js" "$validator" "$work"/*.glb; then
+    echo "all garment GLBs valid"
+    exit 0
+fi
+echo "FAIL: the glTF validator found errors"
+exit 1

@@ -1,0 +1,386 @@
+/*
+ * tests/export/test_marker.c -- the marker (pz_marker_build) and marker.svg:
+ *  - 20 rectangles and L-shapes, some cut twice: every copy placed once,
+ *    rotations 0 or 180 only, every cut line inside [0, width] and above
+ *    y = 0, no two placed cut lines closer than the gap (exact polygon
+ *    distance, crossings and containment included), the second copy of a
+ *    Cut-2 piece is the mirror image of the first (x -> c - x, same y),
+ *    length = the highest placed point, efficiency = areas / (width x
+ *    length), the same result twice (determinism);
+ *  - L-shapes nest into each other's notch: efficiency above what their
+ *    bounding boxes allow on a shelf;
+ *  - a piece wider than the fabric, or with a NaN coordinate: PZ_ERR_DATA
+ *    naming it;
+ *  - report.json's marker object and marker.svg (one group per placement,
+ *    width in mm, rsvg-convert renders it when installed);
+ *  - every garment of ../shared/data/garments (panels from its UVs where it
+ *    has them, else one panel), LSCM-flattened, pieces from pz_pieces_build:
+ *    the marker properties above, and every writer of this part (marker.svg,
+ *    pattern.pdf, pattern-tiled.pdf, garment.glb, report.html) succeeds
+ *    (skipped without the shared data).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "fixture_export_b.h"
+
+#include <stdio.h>
+#include <unistd.h>
+
+static pz_ctx ctx;
+
+/* ------------------------------------------------------------------ geometry checks */
+
+static double point_segment(const double *p, const double *a, const double *b)
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1], l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    return hypot(a[0] + t * dx - p[0], a[1] + t * dy - p[1]);
+}
+
+static int segments_cross(const double *a, const double *b, const double *c, const double *d)
+{
+    double d1 = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+    double d2 = (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0]);
+    double d3 = (d[0] - c[0]) * (a[1] - c[1]) - (d[1] - c[1]) * (a[0] - c[0]);
+    double d4 = (d[0] - c[0]) * (b[1] - c[1]) - (d[1] - c[1]) * (b[0] - c[0]);
+    return ((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0));
+}
+
+static int point_inside(const double *p, const double *poly, int32_t n)
+{
+    int inside = 0;
+    for (int32_t i = 0, j = n - 1; i < n; j = i++) {
+        const double *a = &poly[2 * i], *b = &poly[2 * j];
+        if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0])
+            inside = !inside;
+    }
+    return inside;
+}
+
+/* Distance between two closed polygons; 0 when they cross or one contains the other. */
+static double polygon_distance(const double *p, int32_t n, const double *q, int32_t m)
+{
+    if (point_inside(p, q, m) || point_inside(q, p, n))
+        return 0.0;
+    double best = INFINITY;
+    for (int32_t i = 0; i < n; ++i) {
+        const double *a = &p[2 * i], *b = &p[2 * ((i + 1) % n)];
+        for (int32_t j = 0; j < m; ++j) {
+            const double *c = &q[2 * j], *d = &q[2 * ((j + 1) % m)];
+            if (segments_cross(a, b, c, d))
+                return 0.0;
+            best = fmin(best, fmin(fmin(point_segment(a, c, d), point_segment(b, c, d)),
+                                   fmin(point_segment(c, a, b), point_segment(d, a, b))));
+        }
+    }
+    return best;
+}
+
+static double *placed(const pz_pieces *pieces, const pz_marker_placement *placement)
+{
+    const pz_piece *piece = &pieces->pieces[placement->piece];
+    double *points = malloc((size_t)piece->cut_count * 2 * sizeof(double));
+    REQUIRE(points, "out of memory");
+    pz_marker_place_points(piece, placement, piece->cut, piece->cut_count, points);
+    return points;
+}
+
+/* Every property the issue asks of a marker. */
+static void check_marker(const pz_pieces *pieces, const pz_marker *marker, const pz_export_options *options)
+{
+    int32_t expected = 0;
+    double area = 0.0, top = 0.0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        expected += pieces->pieces[p].mirrored ? 0 : pieces->pieces[p].cut_quantity;
+    CHECK(marker->placement_count == expected, "%d placements, %d copies", (int)marker->placement_count,
+          (int)expected);
+    double **points = calloc((size_t)marker->placement_count, sizeof *points);
+    REQUIRE(points, "out of memory");
+    for (int32_t i = 0; i < marker->placement_count; ++i) {
+        const pz_marker_placement *placement = &marker->placements[i];
+        const pz_piece *piece = &pieces->pieces[placement->piece];
+        CHECK(placement->rotation_deg == 0 || placement->rotation_deg == 180, "rotation %d", placement->rotation_deg);
+        CHECK(placement->mirrored == (placement->copy == 1), "copy %d mirrored %d", (int)placement->copy,
+              placement->mirrored);
+        points[i] = placed(pieces, placement);
+        for (int32_t k = 0; k < piece->cut_count; ++k) {
+            double x = points[i][2 * k], y = points[i][2 * k + 1];
+            CHECK(x >= -1e-9 && x <= options->fabric_width_mm + 1e-9 && y >= -1e-9, "%s at (%g, %g)", piece->name, x,
+                  y);
+            top = fmax(top, y);
+        }
+        area += piece->area_mm2;
+    }
+    int32_t too_close = 0;
+    double closest = INFINITY;
+    for (int32_t i = 0; i < marker->placement_count; ++i)
+        for (int32_t j = i + 1; j < marker->placement_count; ++j) {
+            const pz_piece *a = &pieces->pieces[marker->placements[i].piece];
+            const pz_piece *b = &pieces->pieces[marker->placements[j].piece];
+            double d = polygon_distance(points[i], a->cut_count, points[j], b->cut_count);
+            closest = fmin(closest, d);
+            too_close += d < options->gap_mm - 1e-6;
+        }
+    CHECK(too_close == 0, "%d pairs closer than the %.1f mm gap (closest %.3f)", (int)too_close, options->gap_mm,
+          closest);
+    /* Cut-2 pieces: the two copies are mirror images of each other, grain still along y. */
+    for (int32_t i = 0; i < marker->placement_count; ++i)
+        for (int32_t j = 0; j < marker->placement_count; ++j) {
+            const pz_marker_placement *first = &marker->placements[i], *second = &marker->placements[j];
+            if (first->piece != second->piece || first->copy != 0 || second->copy != 1)
+                continue;
+            const pz_piece *piece = &pieces->pieces[first->piece];
+            double sum_x = points[i][0] + points[j][0], diff_y = points[j][1] - points[i][1];
+            double worst = 0.0;
+            for (int32_t k = 0; k < piece->cut_count && first->rotation_deg == second->rotation_deg; ++k)
+                worst = fmax(worst, fmax(fabs(points[i][2 * k] + points[j][2 * k] - sum_x),
+                                         fabs(points[j][2 * k + 1] - points[i][2 * k + 1] - diff_y)));
+            CHECK(first->rotation_deg == second->rotation_deg && worst < 1e-9, "%s: copies not mirror images (%g)",
+                  piece->name, worst);
+        }
+    for (int32_t i = 0; i < marker->placement_count; ++i)
+        free(points[i]);
+    free(points);
+    CHECK(fabs(marker->length_mm - top) < 1e-9, "length %g, top %g", marker->length_mm, top);
+    CHECK(fabs(marker->efficiency - area / (options->fabric_width_mm * top)) < 1e-12, "efficiency %g",
+          marker->efficiency);
+    CHECK(marker->efficiency > 0 && marker->efficiency <= 1, "efficiency %g", marker->efficiency);
+}
+
+/* ------------------------------------------------------------------ cases */
+
+static pz_pieces *twenty_pieces(void)
+{
+    pz_pieces *pieces = fixture_pieces_alloc(20);
+    for (int32_t p = 0; p < 20; ++p) {
+        char name[32];
+        snprintf(name, sizeof name, "piece_%d", (int)p);
+        double w = 120 + 37 * (p % 7), h = 200 + 53 * (p % 5);
+        fixture_piece_box(&pieces->pieces[p], p, name, w, h, p % 3 == 0);
+        if (p % 4 == 1)
+            pieces->pieces[p].cut_quantity = 2;
+    }
+    return pieces;
+}
+
+static void test_twenty(void)
+{
+    pz_pieces *pieces = twenty_pieces();
+    pz_export_options options;
+    pz_export_options_default(&options);
+    options.fabric_width_mm = 1500;
+    options.gap_mm = 5;
+    pz_marker *marker = NULL, *again = NULL;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    check_marker(pieces, marker, &options);
+    printf("20 pieces (%d placements): length %.1f mm, efficiency %.3f, %.1f ms\n", (int)marker->placement_count,
+           marker->length_mm, marker->efficiency, marker->ms);
+    CHECK(marker->efficiency > 0.6, "efficiency %.3f", marker->efficiency);
+    REQUIRE_OK(pz_marker_build(pieces, &options, &again, &ctx), ctx);
+    CHECK(again->placement_count == marker->placement_count &&
+              memcmp(again->placements, marker->placements,
+                     (size_t)marker->placement_count * sizeof *marker->placements) == 0,
+          "two builds differ");
+
+    /* A narrow fabric and a wide gap: same properties. */
+    pz_marker *narrow = NULL;
+    options.fabric_width_mm = 600;
+    options.gap_mm = 12;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &narrow, &ctx), ctx);
+    check_marker(pieces, narrow, &options);
+    CHECK(narrow->length_mm > marker->length_mm, "narrow %g, wide %g", narrow->length_mm, marker->length_mm);
+
+    /* report.json */
+    cJSON *json = pz_marker_report_json(marker);
+    REQUIRE(json, "no json");
+    CHECK(cJSON_IsNumber(cJSON_GetObjectItem(json, "length_mm")) &&
+              fabs(cJSON_GetObjectItem(json, "efficiency")->valuedouble - marker->efficiency) < 1e-4 &&
+              cJSON_GetObjectItem(json, "pieces")->valueint == marker->placement_count &&
+              cJSON_GetObjectItem(json, "fabric_width_mm")->valuedouble == 1500,
+          "marker json");
+    cJSON_Delete(json);
+
+    /* marker.svg: one group per placement, sizes in mm; rendered by rsvg-convert when installed. */
+    char dir[] = "/tmp/pz_marker_XXXXXX";
+    REQUIRE(mkdtemp(dir), "mkdtemp");
+    char path[256], command[600];
+    snprintf(path, sizeof path, "%s/marker.svg", dir);
+    FILE *file = fopen(path, "w");
+    REQUIRE(file, "cannot write %s", path);
+    pz_export_options svg_options;
+    pz_export_options_default(&svg_options);
+    pz_export_inputs inputs = {.pieces = pieces, .marker = marker, .options = &svg_options};
+    REQUIRE_OK(pz_export_write_marker_svg(file, &inputs, "marker.svg", &ctx), ctx);
+    long size = ftell(file);
+    fclose(file);
+    char *text = malloc((size_t)size + 1);
+    file = fopen(path, "r");
+    REQUIRE(text && file && fread(text, 1, (size_t)size, file) == (size_t)size, "read back");
+    fclose(file);
+    text[size] = 0;
+    int groups = 0;
+    for (const char *at = text; (at = strstr(at, "<g class=\"piece\"")); ++at)
+        ++groups;
+    CHECK(groups == marker->placement_count, "%d groups", groups);
+    CHECK(strstr(text, "width=\"1500.00mm\"") != NULL, "width in mm");
+    CHECK(strstr(text, "efficiency") != NULL, "efficiency text");
+    free(text);
+    if (system("command -v rsvg-convert >/dev/null 2>&1") == 0) {
+        snprintf(command, sizeof command, "rsvg-convert -o %s/marker.png %s", dir, path);
+        CHECK(system(command) == 0, "rsvg-convert failed on %s", path);
+    }
+    snprintf(command, sizeof command, "rm -rf %s", dir);
+    CHECK(system(command) == 0, "cleanup");
+
+    pz_marker_free(&narrow);
+    pz_marker_free(&again);
+    pz_marker_free(&marker);
+    CHECK(marker == NULL, "free sets NULL");
+    fixture_pieces_free(pieces);
+}
+
+/* Ls nest: the marker is shorter than their bounding boxes laid on shelves would need. */
+static void test_nesting(void)
+{
+    pz_pieces *pieces = fixture_pieces_alloc(8);
+    double box_area = 0.0;
+    for (int32_t p = 0; p < 8; ++p) {
+        fixture_piece_box(&pieces->pieces[p], p, "ell", 400, 400, 1);
+        box_area += (pieces->pieces[p].bbox_max[0] - pieces->pieces[p].bbox_min[0]) *
+                    (pieces->pieces[p].bbox_max[1] - pieces->pieces[p].bbox_min[1]);
+    }
+    pz_export_options options;
+    pz_export_options_default(&options);
+    options.fabric_width_mm = 900;
+    pz_marker *marker = NULL;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    check_marker(pieces, marker, &options);
+    int rotated = 0;
+    for (int32_t i = 0; i < marker->placement_count; ++i)
+        rotated += marker->placements[i].rotation_deg == 180;
+    printf("8 L-shapes on 900 mm: length %.1f mm (bounding boxes alone need %.1f), efficiency %.3f, %d rotated\n",
+           marker->length_mm, box_area / 900.0, marker->efficiency, rotated);
+    CHECK(marker->length_mm < box_area / 900.0, "no nesting: %g", marker->length_mm);
+    CHECK(rotated > 0, "never used 180 degrees");
+    pz_marker_free(&marker);
+    fixture_pieces_free(pieces);
+}
+
+static void test_too_wide(void)
+{
+    pz_pieces *pieces = fixture_pieces_alloc(2);
+    fixture_piece_box(&pieces->pieces[0], 0, "small", 100, 100, 0);
+    fixture_piece_box(&pieces->pieces[1], 1, "wide_one", 1700, 100, 0);
+    pz_export_options options;
+    pz_export_options_default(&options);
+    options.fabric_width_mm = 1500;
+    pz_marker *marker = (pz_marker *)&options; /* must come back NULL */
+    CHECK(pz_marker_build(pieces, &options, &marker, &ctx) == PZ_ERR_DATA && strstr(ctx.error, "wide_one") &&
+              marker == NULL,
+          "%s", ctx.error);
+    /* Coordinates that cannot be rasterized. */
+    pieces->pieces[0].cut[3] = NAN;
+    CHECK(pz_marker_build(pieces, &options, &marker, &ctx) == PZ_ERR_DATA && strstr(ctx.error, "small") && !marker,
+          "NaN: %s", ctx.error);
+    /* A Cut-2 piece too wide as a pair but not alone: the copies go one above the other. */
+    fixture_pieces_free(pieces);
+    pieces = fixture_pieces_alloc(1);
+    fixture_piece_box(&pieces->pieces[0], 0, "half", 900, 300, 0);
+    pieces->pieces[0].cut_quantity = 2;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    check_marker(pieces, marker, &options);
+    CHECK(marker->length_mm > 600, "length %g", marker->length_mm);
+    pz_marker_free(&marker);
+    fixture_pieces_free(pieces);
+}
+
+/* One shared garment: pattern, pieces, marker, and every writer of this part. */
+static void check_garment(const char *dir, const char *file)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/garments/%s", dir, file);
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_read(path, &mesh, &ctx), ctx);
+    pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, NULL);
+    int32_t *face_panel = calloc((size_t)mesh->face_count, sizeof(int32_t)), panel_count = 1;
+    uint8_t *extra = NULL;
+    REQUIRE(face_panel, "out of memory");
+    if (mesh->corner_uvs)
+        REQUIRE_OK(pz_pattern_panels_from_uv(mesh, face_panel, &panel_count, &extra, &ctx), ctx);
+    pz_pattern *pattern = NULL;
+    if (pz_pattern_build(mesh, face_panel, extra, NULL, path, &pattern, &ctx) != PZ_OK) {
+        printf("%s: no pattern (%s), skipped\n", file, ctx.error);
+        free(extra), free(face_panel), pz_mesh_free(&mesh);
+        return;
+    }
+    double *uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+    REQUIRE(uv, "out of memory");
+    REQUIRE_OK(pz_param_lscm_pattern(pattern, NULL, uv, &ctx), ctx);
+    pz_metrics *metrics = NULL;
+    REQUIRE_OK(pz_metrics_compute(pattern, uv, 0, NULL, &metrics, &ctx), ctx);
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(pattern, uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+    pz_marker *marker = NULL;
+    double widest = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        widest = fmax(widest, pieces->pieces[p].bbox_max[0] - pieces->pieces[p].bbox_min[0]);
+    if (widest > options.fabric_width_mm) {
+        /* One panel for a whole garment can be wider than the fabric: refused, then laid on a wider one. */
+        CHECK(pz_marker_build(pieces, &options, &marker, &ctx) == PZ_ERR_DATA && !marker, "%s: wide piece", file);
+        options.fabric_width_mm = ceil(widest) + 100;
+    }
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    check_marker(pieces, marker, &options);
+    printf("%s: %d pieces, marker %.1f mm, efficiency %.3f, %.1f ms\n", file, (int)pieces->piece_count,
+           marker->length_mm, marker->efficiency, marker->ms);
+    cJSON *report = cJSON_CreateObject();
+    cJSON_AddItemToObject(report, "marker", pz_marker_report_json(marker));
+    pz_export_inputs inputs = {.garment = mesh, .pattern = pattern, .uv = uv, .metrics = metrics, .pieces = pieces,
+                               .marker = marker, .options = &options, .report = report};
+    pz_export_writer writers[5] = {pz_export_write_marker_svg, pz_export_write_pdf, pz_export_write_pdf_tiled,
+                                   pz_export_write_glb, pz_export_write_report_html};
+    for (int w = 0; w < 5; ++w) {
+        FILE *sink = tmpfile();
+        REQUIRE(sink, "tmpfile");
+        CHECK(writers[w](sink, &inputs, file, &ctx) == PZ_OK && ftell(sink) > 100, "%s: writer %d: %s", file, w,
+              ctx.error);
+        fclose(sink);
+    }
+    cJSON_Delete(report);
+    pz_marker_free(&marker);
+    pz_pieces_free(&pieces);
+    pz_metrics_free(&metrics);
+    free(uv);
+    pz_pattern_free(&pattern);
+    free(extra);
+    free(face_panel);
+    pz_mesh_free(&mesh);
+}
+
+static void test_garments(void)
+{
+    const char *dir = test_shared_data();
+    if (!dir) {
+        printf("garments: skipped (no ../shared/data)\n");
+        return;
+    }
+    const char *files[] = {"diffavatar-tshirt.obj", "diffavatar-shirt.obj", "parafashion-skirt.obj",
+                           "parafashion-dress.ply", "parafashion-leggings.ply", "parafashion-shirt.obj",
+                           "parafashion-wetsuit.obj", "shirtfront-panel.obj"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i)
+        check_garment(dir, files[i]);
+}
+
+int main(void)
+{
+    ctx.quiet = 1;
+    test_twenty();
+    test_garments();
+    test_nesting();
+    test_too_wide();
+    return test_finish();
+}

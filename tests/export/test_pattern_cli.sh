@@ -1,0 +1,80 @@
+#!/bin/bash
+# tests/export/test_pattern_cli.sh -- pattern.svg and pattern.dxf through
+# `panelize flatten` (the export options of the CLI reach the writers):
+#  - a generated skirt (one panel, opened by a self-seam; a wide fabric so the
+#    marker takes it): pattern.svg renders (rsvg-convert) and is as large as
+#    its mm size says at 1 px/mm;
+#  - --seam-allowance 15 --hem-allowance 25: the DXF's cut line (layer 1) lies
+#    15 or 25 mm outside the sew line (layer 14) at its vertices, read with
+#    ezdxf; --dxf-strict: no TABLES section, 7-bit ASCII, audit() clean;
+#  - --allowances FILE: a bad line is exit 65 naming the file and line, and no
+#    pattern file is left behind.
+# Readers that are missing (rsvg-convert, /usr/bin/python3 + ezdxf) skip
+# their checks, printed.
+#
+# SPDX-License-Identifier: GPL-3.0-or-later
+# fontconfig (cairo, pattern.pdf) keeps its caches until exit: not a leak of ours (sanitizer builds).
+export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan-fontconfig.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+source "$(dirname "$0")/../cli/lib.sh"
+
+run generate skirt -o skirt.obj --faces 2000 --quiet
+expect_ok "generate skirt"
+run flatten skirt.obj -o plain --quiet --fabric-width 4000
+expect_ok "flatten skirt"
+check "pattern.svg written" test -s plain/pattern.svg
+check "pattern.dxf written" test -s plain/pattern.dxf
+
+if command -v rsvg-convert >/dev/null; then
+    check "rsvg-convert renders pattern.svg" rsvg-convert --dpi-x 25.4 --dpi-y 25.4 -o plain.png plain/pattern.svg
+    width_mm=$(grep -o 'width="[0-9.]*mm"' plain/pattern.svg | head -1 | tr -dc '0-9.')
+    width_px=$(od -An -j16 -N4 -tu1 plain.png | awk '{print $1 * 16777216 + $2 * 65536 + $3 * 256 + $4}')
+    check "png is ${width_px} px for ${width_mm} mm" awk -v a="$width_px" -v b="$width_mm" \
+        'BEGIN { d = a - b; exit !(d < 1.5 && d > -1.5) }'
+else
+    echo "rsvg-convert: not installed, rendering skipped"
+fi
+
+run flatten skirt.obj -o strict --quiet --fabric-width 4000 --seam-allowance 15 --hem-allowance 25 --dxf-strict
+expect_ok "flatten --dxf-strict"
+check "strict: no TABLES" bash -c '! grep -qx "TABLES" strict/pattern.dxf'
+check "strict: 7-bit ASCII" bash -c '! LC_ALL=C grep -q "[^[:print:][:space:]]" strict/pattern.dxf'
+
+if /usr/bin/python3 -c 'import ezdxf' 2>/dev/null; then
+    check "ezdxf: allowances 15/25 mm, audit clean" /usr/bin/python3 - strict/pattern.dxf <<'PY'
+import math, sys
+import ezdxf
+doc = ezdxf.readfile(sys.argv[1])
+assert not doc.audit().has_errors
+blocks = [b for b in doc.blocks if not b.name.startswith('*')]
+assert blocks, 'no piece blocks'
+for block in blocks:
+    cut = [e for e in block if e.dxftype() == 'POLYLINE' and e.dxf.layer == '1' and e.is_closed]
+    sew = [e for e in block if e.dxftype() == 'POLYLINE' and e.dxf.layer == '14' and e.is_closed]
+    assert len(cut) == 1 and len(sew) == 1, block.name
+    cut = [(v.dxf.location.x, v.dxf.location.y) for v in cut[0].vertices]
+    sew = [(v.dxf.location.x, v.dxf.location.y) for v in sew[0].vertices]
+    def distance(p):
+        best = math.inf
+        for i in range(len(sew)):
+            a, b = sew[i], sew[(i + 1) % len(sew)]
+            dx, dy = b[0] - a[0], b[1] - a[1]
+            t = max(0, min(1, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy or 1)))
+            best = min(best, math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy))
+        return best
+    d = [distance(p) for p in cut]
+    # every cut vertex: at least the seam allowance, at most the mitre limit of the hem allowance
+    assert min(d) > 15 - 0.1 and max(d) < 2 * 25 + 0.1, (block.name, min(d), max(d))
+    # both allowances occur
+    assert any(abs(x - 15) < 0.1 for x in d) and any(abs(x - 25) < 0.1 for x in d), (block.name, sorted(d)[:3])
+print('ok', len(blocks), 'blocks')
+PY
+else
+    echo "ezdxf (/usr/bin/python3): not installed, DXF read-back skipped"
+fi
+
+printf '# bad\n0 1 x\n' >bad.txt
+run flatten skirt.obj -o bad --quiet --fabric-width 4000 --allowances bad.txt
+check "bad allowance file: exit 65 (got $rc)" [ "$rc" -eq 65 ]
+check "bad allowance file: names file and line" grep -q "bad.txt: line 2" err
+check "bad allowance file: no pattern files" bash -c '[ ! -e bad/pattern.svg ] && [ ! -e bad/pattern.dxf ]'
+finish

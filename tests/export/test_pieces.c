@@ -1,0 +1,712 @@
+/*
+ * tests/export/test_pieces.c -- pattern pieces (pz_pieces_build) and their
+ * cut line (the offset of export/offset.c).
+ *
+ * The cut line is checked against the sew line point by point (a sample at
+ * least every millimetre): for every sew edge, its distance is at least that
+ * edge's allowance (at an edge end where the allowance changes: the smaller
+ * one) minus 0.1 mm; where the nearest sew feature is an edge's interior the
+ * distance is that edge's allowance within 0.1 mm; where it is a corner, at
+ * most PZ_OFFSET_MITRE_LIMIT allowances (mitre or square cap). Dart legs
+ * count for the lower bound only and the mouths of bridged darts have no
+ * upper bound (the cut line crosses the dart's V). The cut line never
+ * crosses itself and encloses every sew point. Cases: known answers (a
+ * square), shapes that make raw offsets loop (an acute spike, a narrow slot,
+ * random star polygons), per-edge allowances; a generated bodice in
+ * quarters (notch pairs at equal arc length, mirrored pairs, allowances on
+ * seams vs hems, the allowance file); every shared garment.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "export/export.h"
+#include "export/notches.h"
+#include "export/offset.h"
+#include "export_fixtures.h"
+#include "test_files.h"
+
+#include <float.h>
+
+static pz_ctx ctx;
+
+#define PI 3.14159265358979323846
+
+/* ---------------------------------------------------------------- the cut line checker */
+
+typedef struct outline_check {
+    const double *sew;
+    int32_t sew_count;
+    const double *allowance;
+    const uint8_t *leg_edge;      /* sew_count or NULL: edges of a dart leg */
+    const uint8_t *free_vertex;   /* sew_count or NULL: no upper bound near these (dart mouths) */
+    int32_t bridge_count;         /* darts closed across their mouth: sew index pairs */
+    const int32_t *bridges;
+} outline_check;
+
+typedef struct check_result {
+    int32_t samples, violations, crossings, outside;
+    double worst_low, worst_high;  /* mm below / above the allowed band */
+} check_result;
+
+static double segment_distance(const double p[2], const double *a, const double *b, double *t_out)
+{
+    double dx = b[0] - a[0], dy = b[1] - a[1], length2 = dx * dx + dy * dy;
+    double t = length2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / length2 : 0;
+    t = fmin(1, fmax(0, t));
+    /* Within a micrometre of an end counts as the end (a strip's side has its foot exactly there). */
+    double length = sqrt(length2);
+    if (t * length < 1e-6)
+        t = 0;
+    else if ((1 - t) * length < 1e-6)
+        t = 1;
+    *t_out = t;
+    return hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy);
+}
+
+static int point_in_polygon(const double p[2], const double *poly, int32_t n)
+{
+    int inside = 0;
+    for (int32_t i = 0, j = n - 1; i < n; j = i++) {
+        const double *a = &poly[2 * i], *b = &poly[2 * j];
+        if ((a[1] > p[1]) != (b[1] > p[1]) && p[0] < (b[0] - a[0]) * (p[1] - a[1]) / (b[1] - a[1]) + a[0])
+            inside = !inside;
+    }
+    return inside;
+}
+
+/* 1 when p lies beyond both edges of sew vertex v (its corner region). */
+static int in_wedge(const outline_check *o, const double p[2], int32_t v)
+{
+    int32_t n = o->sew_count, previous = (v + n - 1) % n, next = (v + 1) % n;
+    const double *a = &o->sew[2 * previous], *c = &o->sew[2 * v], *b = &o->sew[2 * next];
+    double in[2] = {c[0] - a[0], c[1] - a[1]}, out[2] = {b[0] - c[0], b[1] - c[1]}, r[2] = {p[0] - c[0], p[1] - c[1]};
+    return r[0] * in[0] + r[1] * in[1] >= -1e-9 && r[0] * out[0] + r[1] * out[1] <= 1e-9;
+}
+
+/* 1 when p lies in the corner region of sew vertex v within the mitre limit. */
+static int in_corner(const outline_check *o, const double p[2], int32_t v)
+{
+    int32_t n = o->sew_count, previous = (v + n - 1) % n;
+    double reach = PZ_OFFSET_MITRE_LIMIT * fmax(o->allowance[previous], o->allowance[v]) + 0.1;
+    return in_wedge(o, p, v) && hypot(p[0] - o->sew[2 * v], p[1] - o->sew[2 * v + 1]) <= reach;
+}
+
+static void check_sample(const outline_check *o, const double p[2], check_result *r)
+{
+    int32_t n = o->sew_count, nearest = -1;
+    double nearest_distance = DBL_MAX, nearest_t = 0, low_needed = 0, low_distance = DBL_MAX;
+    int low_bad = 0;
+    for (int32_t e = 0; e < n; ++e) {
+        double t, d = segment_distance(p, &o->sew[2 * e], &o->sew[2 * ((e + 1) % n)], &t);
+        double need = o->allowance[e];
+        const double *a = &o->sew[2 * e], *b = &o->sew[2 * ((e + 1) % n)];
+        double outward = (p[0] - a[0]) * (b[1] - a[1]) - (p[1] - a[1]) * (b[0] - a[0]);
+        if (t <= 0 || t >= 1) {
+            /* Nearest at an end: in that corner's region, the smaller allowance there; elsewhere the
+             * neighbouring edge rules. */
+            int32_t v = t <= 0 ? e : (e + 1) % n;
+            need = in_wedge(o, p, v) ? fmin(need, o->allowance[t <= 0 ? (e + n - 1) % n : (e + 1) % n]) : 0;
+        }
+        else if (outward < 0)  /* an allowance strip is one-sided: behind the edge, others rule */
+            need = 0;
+        if (d < need - 0.1 && need - d > low_needed - low_distance) {
+            low_bad = 1;
+            low_needed = need;
+            low_distance = d;
+        }
+        if ((!o->leg_edge || !o->leg_edge[e]) && d < nearest_distance) {
+            nearest_distance = d;
+            nearest = e;
+            nearest_t = t;
+        }
+    }
+    ++r->samples;
+    if (low_bad) {
+        if (getenv("PZ_DEBUG_CUT") && r->worst_low == 0)
+            fprintf(stderr, "inside: (%.3f, %.3f) %.3f mm from the sew line, %.3f needed\n", p[0], p[1], low_distance,
+                    low_needed);
+        ++r->violations;
+        r->worst_low = fmax(r->worst_low, low_needed - low_distance);
+        return;
+    }
+    if (nearest < 0)
+        return;
+    int interior = nearest_t > 1e-9 && nearest_t < 1 - 1e-9;
+    if (interior && nearest_distance <= o->allowance[nearest] + 0.1)
+        return;
+    if (!interior) {
+        int32_t v = nearest_t <= 1e-9 ? nearest : (nearest + 1) % n;
+        if (o->free_vertex && o->free_vertex[v])
+            return;
+    }
+    /* Above a dart's mouth: within the allowance of the line that closes it. */
+    for (int32_t k = 0; k < o->bridge_count; ++k) {
+        int32_t i = o->bridges[2 * k], j = o->bridges[2 * k + 1];
+        double t, d = segment_distance(p, &o->sew[2 * i], &o->sew[2 * j], &t);
+        double allowance = fmax(o->allowance[(i + n - 1) % n], o->allowance[j]);
+        if (d <= allowance + 0.1)
+            return;
+        /* The corners the closing line makes at the mouth (mitres within the limit). */
+        for (int end = 0; end < 2; ++end) {
+            const double *m = &o->sew[2 * (end ? j : i)];
+            if (hypot(p[0] - m[0], p[1] - m[1]) <= PZ_OFFSET_MITRE_LIMIT * allowance + 0.1)
+                return;
+        }
+    }
+    /* On the side of a wider edge's strip where the allowance steps down (pattern makers' step). */
+    for (int32_t e = 0; e < n; ++e) {
+        double t, d = segment_distance(p, &o->sew[2 * e], &o->sew[2 * ((e + 1) % n)], &t);
+        if (t >= 0 && t <= 1 && d <= o->allowance[e] + 0.1 && (!o->leg_edge || !o->leg_edge[e]))
+            return;
+    }
+    /* A mitre or cap: inside some corner's region (its nearest sew point may be another edge). */
+    for (int32_t v = 0; v < n; ++v)
+        if ((!o->free_vertex || !o->free_vertex[v]) && in_corner(o, p, v))
+            return;
+    if (getenv("PZ_DEBUG_CUT") && r->worst_high == 0)
+        fprintf(stderr, "beyond: (%.3f, %.3f) nearest edge %d t %.4f distance %.3f\n", p[0], p[1], (int)nearest,
+                nearest_t, nearest_distance);
+    ++r->violations;
+    r->worst_high = fmax(r->worst_high, nearest_distance - o->allowance[nearest]);
+}
+
+static check_result check_cut(const outline_check *o, const double *cut, int32_t cut_count)
+{
+    check_result r = {0};
+    for (int32_t i = 0; i < cut_count; ++i) {
+        const double *a = &cut[2 * i], *b = &cut[2 * ((i + 1) % cut_count)];
+        int steps = (int)ceil(hypot(b[0] - a[0], b[1] - a[1]) / 1.0);
+        for (int k = 0; k < (steps < 1 ? 1 : steps); ++k) {
+            double t = (double)k / (steps < 1 ? 1 : steps), p[2] = {a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])};
+            check_sample(o, p, &r);
+        }
+    }
+    r.crossings = pz_offset_self_intersections(cut, cut_count);
+    for (int32_t i = 0; i < o->sew_count; ++i)
+        r.outside += !point_in_polygon(&o->sew[2 * i], cut, cut_count);
+    return r;
+}
+
+static void expect_good_cut(const check_result *r, const char *what)
+{
+    CHECK(r->violations == 0 && r->crossings == 0 && r->outside == 0,
+          "%s: %d of %d samples off the allowance (worst %.3f mm inside, %.3f mm beyond), %d self-crossings, "
+          "%d sew points outside the cut line",
+          what, (int)r->violations, (int)r->samples, r->worst_low, r->worst_high, (int)r->crossings, (int)r->outside);
+}
+
+/* Offsets a polygon with the given allowances and checks it. */
+static void offset_case(const double *points, int32_t n, const double *allowance, const char *what, double **cut_out,
+                        int32_t *cut_count_out)
+{
+    double *cut = NULL;
+    int32_t cut_count = 0;
+    REQUIRE_OK(pz_offset_polygon(points, n, allowance, &cut, &cut_count, &ctx), ctx);
+    outline_check o = {points, n, allowance, NULL, NULL, 0, NULL};
+    check_result r = check_cut(&o, cut, cut_count);
+    expect_good_cut(&r, what);
+    CHECK(pz_polygon_signed_area(cut, cut_count) > pz_polygon_signed_area(points, n), "%s: cut area", what);
+    if (cut_out) {
+        *cut_out = cut;
+        *cut_count_out = cut_count;
+    } else
+        free(cut);
+}
+
+/* ---------------------------------------------------------------- offsets: known answers and hard shapes */
+
+static void test_square(void)
+{
+    const double square[8] = {0, 0, 100, 0, 100, 100, 0, 100}, ten[4] = {10, 10, 10, 10};
+    double *cut;
+    int32_t count;
+    offset_case(square, 4, ten, "square", &cut, &count);
+    CHECK(count == 4, "a square's cut line has %d corners", (int)count);
+    CHECK(fabs(pz_polygon_signed_area(cut, count) - 120.0 * 120.0) < 1e-6, "area %.6f",
+          pz_polygon_signed_area(cut, count));
+    for (int32_t i = 0; i < count; ++i)
+        CHECK(fabs(fabs(cut[2 * i]) - (cut[2 * i] < 50 ? 10 : 110)) < 1e-9, "corner %d at %g", (int)i, cut[2 * i]);
+    free(cut);
+    /* One edge with 25 mm: that side moves 25, the others 10; corners stay mitred (square). */
+    const double mixed[4] = {25, 10, 10, 10};
+    offset_case(square, 4, mixed, "square, 25 mm bottom", &cut, &count);
+    CHECK(count == 4 && fabs(pz_polygon_signed_area(cut, count) - 120.0 * 135.0) < 1e-6, "%d corners, area %.3f",
+          (int)count, pz_polygon_signed_area(cut, count));
+    free(cut);
+    /* No allowance: the cut line is the sew line. */
+    const double zero[4] = {0, 0, 0, 0};
+    REQUIRE_OK(pz_offset_polygon(square, 4, zero, &cut, &count, &ctx), ctx);
+    CHECK(count == 4 && fabs(pz_polygon_signed_area(cut, count) - 100.0 * 100.0) < 1e-9, "0 mm: %d corners, area %.3f",
+          (int)count, pz_polygon_signed_area(cut, count));
+    free(cut);
+    /* Zero-length and repeated points are tolerated. */
+    const double repeated[10] = {0, 0, 100, 0, 100, 0, 100, 100, 0, 100};
+    const double five[5] = {10, 10, 10, 10, 10};
+    offset_case(repeated, 5, five, "square with a repeated point", NULL, NULL);
+    const double line[6] = {0, 0, 1, 0, 2, 0};
+    double *none = NULL;
+    int32_t none_count = 0;
+    CHECK(pz_offset_polygon(line, 2, five, &none, &none_count, &ctx) == PZ_ERR_DATA && !none, "two points: %s",
+          ctx.error);
+}
+
+static void test_acute_and_slot(void)
+{
+    /* A 10-degree spike: the mitre would be 11 allowances long; it is cut off square. */
+    double spike[6] = {0, 0, 300, 0, 0, 0};
+    spike[4] = 300 * cos(10 * PI / 180);
+    spike[5] = 300 * sin(10 * PI / 180);
+    const double ten[8] = {10, 10, 10, 10, 10, 10, 10, 10};
+    double *cut;
+    int32_t count;
+    offset_case(spike, 3, ten, "10-degree spike", &cut, &count);
+    double reach = 0;
+    for (int32_t i = 0; i < count; ++i)
+        reach = fmax(reach, cut[2 * i]);
+    CHECK(reach < 300 + 2 * 10 + 1e-9, "the spike's cut line reaches x = %.3f", reach);
+    free(cut);
+    /* A U with a 8 mm slot: the offsets of the slot's walls overlap and the cut line bridges it. */
+    const double slot[16] = {0, 0, 100, 0, 100, 100, 54, 100, 54, 20, 46, 20, 46, 100, 0, 100};
+    offset_case(slot, 8, ten, "slot", &cut, &count);
+    int dips = 0;
+    for (int32_t i = 0; i < count; ++i)
+        dips += cut[2 * i + 1] < 105 && cut[2 * i] > 40 && cut[2 * i] < 60;
+    CHECK(dips == 0 && count <= 8, "the cut line enters the slot (%d points, %d corners)", dips, (int)count);
+    free(cut);
+    /* A wide slot (40 mm): the cut line follows it in. */
+    const double wide[16] = {0, 0, 100, 0, 100, 100, 70, 100, 70, 20, 30, 20, 30, 100, 0, 100};
+    offset_case(wide, 8, ten, "wide slot", &cut, &count);
+    double deepest = DBL_MAX;
+    for (int32_t i = 0; i < count; ++i)
+        if (cut[2 * i] > 35 && cut[2 * i] < 65)
+            deepest = fmin(deepest, cut[2 * i + 1]);
+    CHECK(fabs(deepest - 30) < 1e-9, "the cut line in the wide slot reaches y = %.3f (30 expected)", deepest);
+    free(cut);
+}
+
+/* Star polygons with random radii: concave corners, short edges and overlapping offsets everywhere. */
+static void test_random_stars(void)
+{
+    uint64_t state = 12345;
+    int failures_before = 0;
+    (void)failures_before;
+    for (int trial = 0; trial < 60; ++trial) {
+        int32_t n = 8 + trial % 40;
+        double *points = malloc(2 * (size_t)n * sizeof(double)), *allowance = malloc((size_t)n * sizeof(double));
+        REQUIRE(points && allowance, "out of memory");
+        for (int32_t i = 0; i < n; ++i) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            double radius = 40 + 160 * (double)(state >> 11) / 9007199254740992.0;
+            double angle = 2 * PI * i / n;
+            points[2 * i] = radius * cos(angle);
+            points[2 * i + 1] = radius * sin(angle);
+            allowance[i] = trial % 3 == 0 ? 5 + 10 * (double)((state >> 20) % 3) : 10;
+        }
+        char what[64];
+        snprintf(what, sizeof what, "star %d (%d points)", trial, (int)n);
+        offset_case(points, n, allowance, what, NULL, NULL);
+        free(points);
+        free(allowance);
+    }
+}
+
+/* ---------------------------------------------------------------- pieces */
+
+/* Leg edges, leg vertices and the mouths of folded darts (sew index pairs) on a piece. */
+static int32_t dart_flags(const pz_pattern *pattern, const pz_piece *piece, uint8_t *leg_edge, uint8_t *free_vertex,
+                          int32_t *bridges)
+{
+    int32_t n = piece->sew_count, bridge_count = 0;
+    memset(leg_edge, 0, (size_t)n);
+    memset(free_vertex, 0, (size_t)n);
+    for (int32_t d = 0; d < pattern->dart_count; ++d) {
+        const pz_dart *dart = &pattern->darts[d];
+        uint8_t *on = calloc((size_t)n, 1);
+        REQUIRE(on, "out of memory");
+        int32_t tip = -1;
+        for (int32_t i = 0; i < n; ++i) {
+            int32_t a = piece->sew_vertex[i];
+            on[i] = a == dart->tip;
+            if (a == dart->tip)
+                tip = i;
+            for (int32_t k = 0; k < dart->pair_count; ++k)
+                on[i] |= a == dart->leg_a[k] || a == dart->leg_b[k];
+        }
+        for (int32_t i = 0; i < n; ++i) {
+            leg_edge[i] |= on[i] && on[(i + 1) % n];
+            free_vertex[i] |= on[i];
+        }
+        if (tip >= 0) {
+            int32_t back = 0, ahead = 0;
+            while (back < n && on[(tip - back - 1 + n) % n] && piece->sew_vertex[(tip - back - 1 + n) % n] != dart->tip)
+                ++back;
+            while (ahead < n && on[(tip + ahead + 1) % n])
+                ++ahead;
+            int32_t a = (tip - back + n) % n, b = (tip + ahead) % n;
+            double width = hypot(piece->sew[2 * b] - piece->sew[2 * a], piece->sew[2 * b + 1] - piece->sew[2 * a + 1]);
+            double allowance = fmax(piece->sew_allowance[(a + n - 1) % n], piece->sew_allowance[b]);
+            if (back > 0 && ahead > 0 && back + ahead + 3 <= n && width <= PZ_DART_FOLD_LIMIT * allowance) {
+                bridges[2 * bridge_count] = a;
+                bridges[2 * bridge_count++ + 1] = b;
+            }
+        }
+        free(on);
+    }
+    return bridge_count;
+}
+
+static void check_piece_cuts(const pz_pattern *pattern, const pz_pieces *pieces, const char *what)
+{
+    for (int32_t p = 0; p < pieces->piece_count; ++p) {
+        const pz_piece *piece = &pieces->pieces[p];
+        uint8_t *flags = malloc(2 * (size_t)piece->sew_count);
+        int32_t *bridges = malloc(2 * ((size_t)pattern->dart_count + 1) * sizeof(int32_t));
+        REQUIRE(flags && bridges, "out of memory");
+        int32_t bridge_count = dart_flags(pattern, piece, flags, flags + piece->sew_count, bridges);
+        outline_check o = {piece->sew,   piece->sew_count, piece->sew_allowance, flags, flags + piece->sew_count,
+                           bridge_count, bridges};
+        check_result r = check_cut(&o, piece->cut, piece->cut_count);
+        char name[160];
+        snprintf(name, sizeof name, "%s: %s", what, piece->name);
+        expect_good_cut(&r, name);
+        CHECK(piece->area_mm2 > piece->sew_area_mm2 && piece->sew_area_mm2 > 0, "%s: areas %.1f / %.1f", name,
+              piece->area_mm2, piece->sew_area_mm2);
+        CHECK(piece->grain[1][1] > piece->grain[0][1] && piece->grain[1][0] == piece->grain[0][0],
+              "%s: grainline not along +v", name);
+        free(flags);
+        free(bridges);
+    }
+}
+
+/* Every seam's notch labels appear once on each side, at equal arc length (ends: the seam's length mismatch). */
+static double check_notch_pairs(const pz_pattern *pattern, const pz_pieces *pieces, const double *uv,
+                                const char *what, double *worst_end)
+{
+    double worst = 0;
+    *worst_end = 0;
+    for (int32_t s = 0; s < pattern->seam_count; ++s) {
+        int32_t count = 0, unpaired = 0;
+        for (int32_t p = 0; p < pieces->piece_count; ++p)
+            for (int32_t i = 0; i < pieces->pieces[p].notch_count; ++i) {
+                const pz_notch *a = &pieces->pieces[p].notches[i];
+                if (a->seam != s)
+                    continue;
+                ++count;
+                int partners = 0;
+                double arc = 0;
+                for (int32_t q = 0; q < pieces->piece_count; ++q)
+                    for (int32_t j = 0; j < pieces->pieces[q].notch_count; ++j) {
+                        const pz_notch *b = &pieces->pieces[q].notches[j];
+                        if (b != a && b->seam == s && strcmp(a->label, b->label) == 0) {
+                            ++partners;
+                            arc = b->arc_mm;
+                        }
+                    }
+                if (partners != 1) {
+                    ++unpaired;
+                    continue;
+                }
+                /* The seam's sides' lengths: the end notch may differ by their mismatch only. */
+                const pz_seam *seam = &pattern->seams[s];
+                double length[2] = {0, 0};
+                for (int32_t k = 1; k < seam->pair_count; ++k) {
+                    const int32_t *side[2] = {seam->side_a, seam->side_b};
+                    for (int h = 0; h < 2; ++h)
+                        length[h] += hypot(uv[2 * side[h][k]] - uv[2 * side[h][k - 1]],
+                                           uv[2 * side[h][k] + 1] - uv[2 * side[h][k - 1] + 1]);
+                }
+                double allowed = 0.5;
+                if (fabs(a->arc_mm - length[0]) < 1e-9 || fabs(a->arc_mm - length[1]) < 1e-9) {
+                    allowed = fmax(allowed, fabs(length[0] - length[1]) + 1e-6);
+                    *worst_end = fmax(*worst_end, fabs(a->arc_mm - arc));
+                } else
+                    worst = fmax(worst, fabs(a->arc_mm - arc));
+                CHECK(fabs(a->arc_mm - arc) <= allowed, "%s: seam %d notch %s at %.3f and %.3f mm", what, (int)s,
+                      a->label, a->arc_mm, arc);
+            }
+        CHECK(count >= 4 && unpaired == 0, "%s: seam %d has %d notches, %d unpaired", what, (int)s, (int)count,
+              (int)unpaired);
+    }
+    return worst;
+}
+
+static void test_bodice(void)
+{
+    fixture f = fixture_generated(PZ_SHAPE_BODICE, 3000, 1);
+    pz_export_options options;
+    pz_export_options_default(&options);
+    options.hem_allowance_mm = 25;
+    options.garment_name = "bodice";
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, f.panel_mirror, NULL, &pieces, &ctx), ctx);
+    REQUIRE(pieces->piece_count == 4, "%d pieces", (int)pieces->piece_count);
+    CHECK(strcmp(pieces->garment_name, "bodice") == 0 && strcmp(pieces->size_name, "base") == 0, "names %s %s",
+          pieces->garment_name, pieces->size_name);
+    check_piece_cuts(f.pattern, pieces, "bodice");
+    double worst_end, worst = check_notch_pairs(f.pattern, pieces, f.uv, "bodice", &worst_end);
+    printf("bodice: %d seams, notch pairs differ by %.2e mm at most (%.3f mm at the seams' ends: textile length "
+           "mismatch)\n",
+           (int)f.pattern->seam_count, worst, worst_end);
+    /* Seam edges carry 10 mm, open edges (neck, waist) 25 mm, and both kinds exist on every piece. */
+    int32_t mirrored = 0, doubled = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p) {
+        const pz_piece *piece = &pieces->pieces[p];
+        int32_t seam_edges = 0, hem_edges = 0;
+        for (int32_t i = 0; i < piece->sew_count; ++i) {
+            seam_edges += piece->sew_allowance[i] == 10;
+            hem_edges += piece->sew_allowance[i] == 25;
+        }
+        CHECK(seam_edges > 0 && hem_edges > 0 && seam_edges + hem_edges == piece->sew_count,
+              "%s: %d seam and %d hem edges of %d", piece->name, (int)seam_edges, (int)hem_edges,
+              (int)piece->sew_count);
+        mirrored += piece->mirrored;
+        doubled += piece->cut_quantity == 2;
+        if (piece->mirrored)
+            CHECK(pieces->pieces[piece->mirror_piece].cut_quantity == 2 &&
+                      pieces->pieces[piece->mirror_piece].mirror_piece == p,
+                  "%s: its partner does not carry Cut 2", piece->name);
+    }
+    /* The halves' jagged seams (faces split by their centroids) differ by millimetres: not mirror images. */
+    printf("bodice: %d mirrored pairs\n", (int)doubled);
+    CHECK(mirrored == doubled, "mirror pairs: %d mirrored, %d cut twice", (int)mirrored, (int)doubled);
+    pz_pieces_free(&pieces);
+    CHECK(pieces == NULL, "free sets NULL");
+    pz_pieces_free(&pieces);
+
+    /* Without a mirror map nothing is paired. */
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        CHECK(pieces->pieces[p].cut_quantity == 1 && !pieces->pieces[p].mirrored, "paired without a map");
+    pz_pieces_free(&pieces);
+
+    /* Per-seam allowance file: seam between panels 0 and 1 gets 15 mm. */
+    char path[512];
+    test_temp_path(path, sizeof path, "allowances.txt");
+    int32_t a = f.pattern->seams[0].panel_a, b = f.pattern->seams[0].panel_b;
+    char text[128];
+    snprintf(text, sizeof text, "# panel panel mm\n\n%d %d 15 # front\n", (int)b, (int)a);
+    test_write_file(path, text, strlen(text));
+    double *allowances = NULL;
+    REQUIRE_OK(pz_export_read_allowances(path, f.pattern, &allowances, &ctx), ctx);
+    CHECK(allowances[0] == 15, "seam 0 gets %g", allowances[0]);
+    options.seam_allowances_mm = allowances;
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+    int32_t fifteen = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        for (int32_t i = 0; i < pieces->pieces[p].sew_count; ++i)
+            fifteen += pieces->pieces[p].sew_allowance[i] == 15;
+    CHECK(fifteen >= 2 * (f.pattern->seams[0].pair_count - 1), "%d edges with 15 mm", (int)fifteen);
+    check_piece_cuts(f.pattern, pieces, "bodice, seam 0 at 15 mm");
+    pz_pieces_free(&pieces);
+    free(allowances);
+    options.seam_allowances_mm = NULL;
+
+    struct { const char *text, *expect; } bad[] = {
+        {"0 1\n", "line 1: expected"}, {"0 1 x\n", "'x' is not a number"}, {"0 1 -2\n", "negative allowance"},
+        {"0 9 10\n", "panel ids must be"}, {"0 0 10\n", "no seam joins panels 0 and 0"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
+        test_write_file(path, bad[i].text, strlen(bad[i].text));
+        CHECK(pz_export_read_allowances(path, f.pattern, &allowances, &ctx) == PZ_ERR_DATA && !allowances &&
+                  strstr(ctx.error, bad[i].expect) && strstr(ctx.error, path),
+              "case %zu: %s", i, ctx.error);
+    }
+    CHECK(pz_export_read_allowances("/nonexistent/a.txt", f.pattern, &allowances, &ctx) == PZ_ERR_OPEN, "%s",
+          ctx.error);
+    options.seam_allowance_mm = -1;
+    CHECK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx) == PZ_ERR_USAGE && !pieces, "%s",
+          ctx.error);
+    fixture_free(&f);
+}
+
+/* Three flat quadrilaterals: 0 and 1 mirror images (1 also moved and turned), 2 a different shape. */
+static void test_mirrored_pairs(void)
+{
+    const double shape[4][2] = {{0, 0}, {100, 0}, {80, 150}, {0, 150}};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_create(12, 6, &mesh, &ctx), ctx);
+    double angle = 0.3, c = cos(angle), s = sin(angle);
+    for (int k = 0; k < 4; ++k) {
+        double *a = &mesh->positions[3 * k], *b = &mesh->positions[3 * (4 + k)], *d = &mesh->positions[3 * (8 + k)];
+        a[0] = shape[k][0];
+        a[1] = shape[k][1];
+        double x = -shape[k][0], y = shape[k][1];   /* mirrored, turned and moved */
+        b[0] = 400 + c * x - s * y;
+        b[1] = 50 + s * x + c * y;
+        d[0] = 600 + shape[k][0] * (k == 2 ? 1.3 : 1);
+        d[1] = shape[k][1];
+    }
+    const int32_t faces[18] = {0, 1, 2, 0, 2, 3, 4, 6, 5, 4, 7, 6, 8, 9, 10, 8, 10, 11};
+    memcpy(mesh->faces, faces, sizeof faces);
+    mesh->unit_scale = 1;
+    const int32_t face_panel[6] = {0, 0, 1, 1, 2, 2}, mirror[3] = {1, 0, 1};
+    pz_pattern *pattern = NULL;
+    REQUIRE_OK(pz_pattern_build(mesh, face_panel, NULL, NULL, "quads", &pattern, &ctx), ctx);
+    double uv[24];
+    for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v) {
+        uv[2 * v] = pattern->mesh->positions[3 * v];
+        uv[2 * v + 1] = pattern->mesh->positions[3 * v + 1];
+    }
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_pieces *pieces = NULL;
+    const char *names[3] = {"front", NULL, ""};
+    REQUIRE_OK(pz_pieces_build(pattern, uv, &options, mirror, names, &pieces, &ctx), ctx);
+    const pz_piece *p = pieces->pieces;
+    CHECK(p[0].cut_quantity == 2 && p[0].mirror_piece == 1 && !p[0].mirrored, "piece 0: %d %d %d",
+          (int)p[0].cut_quantity, (int)p[0].mirror_piece, p[0].mirrored);
+    CHECK(p[1].mirrored && p[1].mirror_piece == 0, "piece 1: mirrored %d of %d", p[1].mirrored, (int)p[1].mirror_piece);
+    CHECK(p[2].cut_quantity == 1 && !p[2].mirrored && p[2].mirror_piece == -1, "piece 2 paired");
+    CHECK(strcmp(p[0].name, "front") == 0 && strcmp(p[1].name, "panel_1") == 0 && strcmp(p[2].name, "panel_2") == 0,
+          "names %s %s %s", p[0].name, p[1].name, p[2].name);
+    /* The quadrilateral's cut line: 4 mitred corners (the 60-degree-ish top corner stays within the limit). */
+    CHECK(p[0].cut_count == 4 && p[0].sew_count == 4, "cut %d sew %d", (int)p[0].cut_count, (int)p[0].sew_count);
+    CHECK(fabs(p[0].sew_area_mm2 - 0.5 * (100 + 80) * 150) < 1e-6, "sew area %.3f", p[0].sew_area_mm2);
+    /* Grainline: 60% of the height through the centroid, along +v. */
+    CHECK(fabs(p[0].grain[1][1] - p[0].grain[0][1] - 90) < 1e-9, "grain length %.3f",
+          p[0].grain[1][1] - p[0].grain[0][1]);
+    /* Open edges only, no seams: no notches. */
+    CHECK(p[0].notch_count == 0 && p[0].line_count == 0, "%d notches", (int)p[0].notch_count);
+    pz_pieces_free(&pieces);
+    pz_pattern_free(&pattern);
+    pz_mesh_free(&mesh);
+}
+
+/* A flat rectangle with a V dart from its top edge, as a pattern of one panel (mouth 20 or 60 mm wide). */
+static void dart_case(double half_mouth, int expect_folded)
+{
+    pz_pattern *pattern = calloc(1, sizeof *pattern);
+    REQUIRE(pattern, "out of memory");
+    REQUIRE_OK(pz_mesh_create(7, 5, &pattern->mesh, &ctx), ctx);
+    const double xy[7][2] = {{0, 0}, {200, 0}, {200, 100}, {100 + half_mouth, 100}, {100, 40}, {100 - half_mouth, 100},
+                             {0, 100}};
+    const int32_t faces[15] = {0, 1, 4, 1, 2, 3, 1, 3, 4, 0, 4, 5, 0, 5, 6};
+    double uv[14];
+    for (int v = 0; v < 7; ++v) {
+        pattern->mesh->positions[3 * v] = uv[2 * v] = xy[v][0];
+        pattern->mesh->positions[3 * v + 1] = uv[2 * v + 1] = xy[v][1];
+    }
+    memcpy(pattern->mesh->faces, faces, sizeof faces);
+    pattern->mesh->unit_scale = 1;
+    pattern->panel_count = 1;
+    pattern->face_panel = calloc(5, sizeof(int32_t));
+    pattern->vertex_origin = malloc(7 * sizeof(int32_t));
+    pattern->darts = calloc(1, sizeof(pz_dart));
+    REQUIRE(pattern->face_panel && pattern->vertex_origin && pattern->darts, "out of memory");
+    for (int v = 0; v < 7; ++v)
+        pattern->vertex_origin[v] = v;
+    pattern->dart_count = 1;
+    pattern->darts[0] = (pz_dart){0, 4, 1, malloc(sizeof(int32_t)), malloc(sizeof(int32_t))};
+    REQUIRE(pattern->darts[0].leg_a && pattern->darts[0].leg_b, "out of memory");
+    pattern->darts[0].leg_a[0] = 5;
+    pattern->darts[0].leg_b[0] = 3;
+    pz_export_options options;
+    pz_export_options_default(&options);
+    options.hem_allowance_mm = 15;
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(pattern, uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+    const pz_piece *piece = &pieces->pieces[0];
+    char what[64];
+    snprintf(what, sizeof what, "dart %.0f mm wide", 2 * half_mouth);
+    check_piece_cuts(pattern, pieces, what);
+    /* Folded: the cut line runs straight across the mouth, 15 mm (the hem's) above it; cut out: it dips in. */
+    const double in_mouth[2] = {100, 95};
+    CHECK(point_in_polygon(in_mouth, piece->cut, piece->cut_count) == expect_folded, "%s: folded %d expected", what,
+          expect_folded);
+    const double above[2] = {100, 115};
+    double nearest = DBL_MAX, t;
+    for (int32_t i = 0; i < piece->cut_count; ++i)
+        nearest = fmin(nearest, segment_distance(above, &piece->cut[2 * i],
+                                                 &piece->cut[2 * ((i + 1) % piece->cut_count)], &t));
+    CHECK((nearest < 1e-6) == expect_folded, "%s: the cut line passes %.3f mm from (100, 115)", what, nearest);
+    /* The legs carry the seam allowance, the other edges the hem's. */
+    int32_t seam_edges = 0;
+    for (int32_t i = 0; i < piece->sew_count; ++i)
+        seam_edges += piece->sew_allowance[i] == 10;
+    CHECK(seam_edges == 2, "%s: %d edges with the seam allowance", what, (int)seam_edges);
+    /* Notches D1 at both mouth ends, from the cut line inward; legs, fold line and a tip cross drawn. */
+    CHECK(piece->notch_count == 2 && strcmp(piece->notches[0].label, "D1") == 0 &&
+              strcmp(piece->notches[1].label, "D1") == 0 && piece->notches[0].dart == 0 && piece->notches[0].seam == -1,
+          "%s: %d notches", what, (int)piece->notch_count);
+    for (int32_t i = 0; i < piece->notch_count; ++i)
+        CHECK(piece->notches[i].depth_mm > 0 && piece->notches[i].depth_mm <= 5 &&
+                  point_in_polygon(piece->notches[i].position, piece->cut, piece->cut_count),
+              "%s: notch %d depth %.3f", what, (int)i, piece->notches[i].depth_mm);
+    CHECK(piece->line_count == 5, "%s: %d internal lines", what, (int)piece->line_count);
+    pz_pieces_free(&pieces);
+    pz_pattern_free(&pattern);
+}
+
+static void test_darts(void)
+{
+    dart_case(10, 1);   /* 20 mm mouth: folded (limit: 4 x 15 mm) */
+    dart_case(35, 0);   /* 70 mm: cut out */
+}
+
+static void test_labels(void)
+{
+    char label[16];
+    pz_notch_label(0, 0, label);
+    CHECK(strcmp(label, "A1") == 0, "%s", label);
+    pz_notch_label(25, 11, label);
+    CHECK(strcmp(label, "Z12") == 0, "%s", label);
+    pz_notch_label(26, 0, label);
+    CHECK(strcmp(label, "AA1") == 0, "%s", label);
+    pz_notch_label(26 + 26 * 26, 2, label);   /* after ZZ */
+    CHECK(strcmp(label, "AAA3") == 0, "%s", label);
+}
+
+/* ---------------------------------------------------------------- shared garments */
+
+static void test_shared(void)
+{
+    const char *dir = test_shared_data();
+    if (!dir) {
+        printf("shared garments: skipped (no ../shared/data)\n");
+        return;
+    }
+    int built = 0;
+    for (size_t g = 0; g < sizeof fixture_garments / sizeof fixture_garments[0]; ++g) {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/garments/%s", dir, fixture_garments[g].file);
+        fixture f;
+        if (!fixture_shared(&f, path, fixture_garments[g].use_uv))
+            continue;
+        ++built;
+        pz_export_options options;
+        pz_export_options_default(&options);
+        pz_pieces *pieces = NULL;
+        double start = pz_seconds();
+        REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+        double ms = 1000 * (pz_seconds() - start);
+        check_piece_cuts(f.pattern, pieces, fixture_garments[g].file);
+        int32_t notches = 0, cut_points = 0;
+        for (int32_t p = 0; p < pieces->piece_count; ++p) {
+            notches += pieces->pieces[p].notch_count;
+            cut_points += pieces->pieces[p].cut_count;
+        }
+        double worst_end, worst = check_notch_pairs(f.pattern, pieces, f.uv, fixture_garments[g].file, &worst_end);
+        printf("%-26s %2d pieces, %2d seams, %d darts, %4d notches, %5d cut points, pairs %.1e mm (ends %.2f mm), "
+               "%.1f ms\n",
+               fixture_garments[g].file, (int)pieces->piece_count, (int)f.pattern->seam_count,
+               (int)f.pattern->dart_count, (int)notches, (int)cut_points, worst, worst_end, ms);
+        pz_pieces_free(&pieces);
+        fixture_free(&f);
+    }
+    CHECK(built >= 3, "only %d shared garments could be built", built);
+}
+
+int main(void)
+{
+    test_temp_dir_create("pz_export_pieces");
+    test_square();
+    test_acute_and_slot();
+    test_random_stars();
+    test_labels();
+    test_mirrored_pairs();
+    test_darts();
+    test_bodice();
+    test_shared();
+    test_remove_tree(test_temp_dir);
+    return test_finish();
+}

@@ -1,0 +1,420 @@
+/*
+ * tests/segment/test_segment.c -- the automatic layout (pz_segment) on small
+ * generated garments (about 3,000 faces so the test stays fast):
+ *  - bodice and skirt at S = 0.05, C = 8: every panel a disk with at most C
+ *    corners, strain within S, no flip (as re-measured by pz_segment_goals
+ *    on the returned layout), goals_met, and pz_pattern_build accepts
+ *    face_panel + extra_cuts with the same panel count;
+ *  - bodice (symmetric about x = 0): the plane is found, every panel has a
+ *    mirror panel whose mirror is itself, the cut edges' residual is below
+ *    two mean edges;
+ *  - bodice: a mirrored pair of darts (a dart adds no corner: docs/segment.md);
+ *    every layout's darts start at their tip, are at most half their panel's
+ *    extent long, open by 2 degrees or more and become pz_darts;
+ *  - bodice at S = 0.03 and at C = 6: never fewer panels than at the defaults,
+ *    and their panels meet those stricter goals;
+ *  - bodice with 1 and 2 threads: identical face_panel and cut flags;
+ *  - a hemisphere at S = 0: returns PZ_OK with goals_met = 0 and a reason;
+ *  - two separate open cylinders: no panel spans both, goals met;
+ *  - a closed torus: every panel has a boundary (loops were inserted);
+ *  - a sketched line down the bodice's centre front stays in the layout as
+ *    sketch curves covering its whole height, goals met;
+ *  - the skirt of ../shared/data (when present): at least one dart;
+ *  - the wetsuit of ../shared/data (when present): goals met, which needs the
+ *    fallback cut through its vertex of large angle excess.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "param/param.h"
+#include "segment/segment.h"
+#include "test_meshes.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static pz_ctx ctx;
+
+typedef struct garment {
+    pz_mesh *mesh;
+    pz_topology *topology;
+    pz_field *field;
+} garment;
+
+static garment garment_of(pz_mesh *mesh)
+{
+    garment g = {mesh, test_topology(mesh, &ctx), NULL};
+    REQUIRE_OK(pz_field_compute(g.mesh, g.topology, NULL, &g.field, &ctx), ctx);
+    return g;
+}
+
+static garment generated(pz_shape shape, int32_t faces)
+{
+    pz_generate_options options = {faces, 0, 0};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_generate(shape, &options, &mesh, &ctx), ctx);
+    return garment_of(mesh);
+}
+
+static void garment_free(garment *g)
+{
+    pz_field_free(&g->field);
+    pz_topology_free(&g->topology);
+    pz_mesh_free(&g->mesh);
+}
+
+static pz_segment_result *segment(const garment *g, double max_strain, int32_t max_corners, int threads,
+                                  pz_symmetry_mode symmetry)
+{
+    pz_segment_options options;
+    pz_segment_options_default(&options);
+    options.max_strain = max_strain;
+    options.max_corners = max_corners;
+    options.threads = threads;
+    options.symmetry = symmetry;
+    pz_segment_result *result = NULL;
+    REQUIRE_OK(pz_segment(g->mesh, g->topology, g->field, &options, &result, &ctx), ctx);
+    REQUIRE(result->face_count == g->mesh->face_count, "face count %d", (int)result->face_count);
+    return result;
+}
+
+/* Re-measures every panel of the layout and checks the goals by themselves; returns the panels meeting them. */
+static int32_t check_panels(const garment *g, const pz_segment_result *result, double max_strain,
+                            int32_t max_corners, const char *what)
+{
+    pz_goal_options goals = {max_corners, max_strain, {0, 0, 1}, 0};
+    int32_t *ids = malloc((size_t)g->mesh->face_count * sizeof(int32_t));
+    REQUIRE(ids, "out of memory");
+    int32_t meeting = 0;
+    for (int32_t p = 0; p < result->panel_count; ++p) {
+        int32_t count = 0;
+        for (int32_t f = 0; f < g->mesh->face_count; ++f)
+            if (result->face_panel[f] == p)
+                ids[count++] = f;
+        REQUIRE(count > 0, "%s: panel %d is empty", what, (int)p);
+        pz_goal_result check;
+        REQUIRE_OK(pz_segment_goals(g->mesh, g->topology, result->edge_cut, ids, count, &goals, &check, &ctx), ctx);
+        CHECK(check.failures == result->panels[p].goals.failures, "%s: panel %d reported %u, measured %u", what,
+              (int)p, result->panels[p].goals.failures, check.failures);
+        meeting += check.failures == 0;
+    }
+    free(ids);
+    return meeting;
+}
+
+/*
+ * The darts of a layout: each dart curve starts at its tip (an inner vertex
+ * with one cut edge), the panels' dart counts add up, each dart is at most
+ * half its panel's extent (bounding-box diagonal) long and opens by at least
+ * 2 degrees in the panel's evaluation, and pz_pattern_build makes each a
+ * pz_dart.
+ */
+static void check_darts(const garment *g, const pz_segment_result *result, const pz_pattern *pattern,
+                        const char *what)
+{
+    const pz_topology *t = g->topology;
+    int32_t per_panel = 0, curves = 0;
+    for (int32_t p = 0; p < result->panel_count; ++p) {
+        per_panel += result->panels[p].darts;
+        if (result->panels[p].darts > 0)
+            CHECK(result->panels[p].goals.min_dart_opening_deg >= 2, "%s: panel %d's darts open by %g degrees",
+                  what, (int)p, result->panels[p].goals.min_dart_opening_deg);
+    }
+    for (int32_t c = 0; c < result->curve_count; ++c) {
+        const pz_layout_curve *curve = result->curves + c;
+        if (curve->kind != PZ_LAYOUT_DART)
+            continue;
+        ++curves;
+        int32_t tip = curve->vertices[0], cut_edges = 0;
+        for (int32_t e = 0; e < t->edge_count; ++e) {
+            int32_t h = t->edge_halfedge[2 * e];
+            if (result->edge_cut[e] && (pz_he_from(t, h) == tip || pz_he_to(t, h) == tip))
+                ++cut_edges;
+        }
+        CHECK(!t->vertex_on_boundary[tip] && cut_edges == 1, "%s: dart %d: tip %d has %d cut edges", what, (int)c,
+              (int)tip, (int)cut_edges);
+        double length = 0, lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (int32_t i = 0; i + 1 < curve->vertex_count; ++i) {
+            const double *a = g->mesh->positions + 3 * curve->vertices[i];
+            const double *b = g->mesh->positions + 3 * curve->vertices[i + 1];
+            length += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+        }
+        int32_t panel = -1;
+        for (int32_t f = 0; f < g->mesh->face_count && panel < 0; ++f)
+            for (int k = 0; k < 3; ++k)
+                if (g->mesh->faces[3 * f + k] == tip)
+                    panel = result->face_panel[f];
+        for (int32_t f = 0; f < g->mesh->face_count; ++f)
+            for (int k = 0; k < 3 && result->face_panel[f] == panel; ++k)
+                for (int d = 0; d < 3; ++d) {
+                    double x = g->mesh->positions[3 * g->mesh->faces[3 * f + k] + d];
+                    lo[d] = fmin(lo[d], x);
+                    hi[d] = fmax(hi[d], x);
+                }
+        double extent = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                             (hi[2] - lo[2]) * (hi[2] - lo[2]));
+        CHECK(length <= 0.5 * extent + 1e-9, "%s: dart %d is %.1f mm long, its panel %.1f mm across", what, (int)c,
+              length, extent);
+    }
+    CHECK(curves == result->dart_count && per_panel == result->dart_count,
+          "%s: darts: %d curves, %d in panels, count %d", what, (int)curves, (int)per_panel, (int)result->dart_count);
+    if (pattern)
+        CHECK(pattern->dart_count == result->dart_count, "%s: pattern has %d darts, layout %d", what,
+              (int)pattern->dart_count, (int)result->dart_count);
+}
+
+/* Every goal met, and the layout makes a pattern with the same panels. */
+static void check_layout(const garment *g, const pz_segment_result *result, double max_strain, int32_t max_corners,
+                         const char *what)
+{
+    int32_t meeting = check_panels(g, result, max_strain, max_corners, what);
+    CHECK(result->goals_met, "%s: goals not met: %s", what, result->reasons);
+    CHECK(meeting == result->panel_count, "%s: %d of %d panels meet the goals", what, (int)meeting,
+          (int)result->panel_count);
+    for (int32_t p = 0; p < result->panel_count; ++p) {
+        const pz_goal_result *goals = &result->panels[p].goals;
+        CHECK(goals->corners <= max_corners, "%s: panel %d has %d corners", what, (int)p, (int)goals->corners);
+        CHECK(goals->max_abs_strain >= 0 && goals->max_abs_strain <= max_strain, "%s: panel %d strain %g", what,
+              (int)p, goals->max_abs_strain);
+        CHECK(goals->flipped_triangles == 0, "%s: panel %d flips %d", what, (int)p, (int)goals->flipped_triangles);
+    }
+    pz_pattern *pattern = NULL;
+    pz_status status = pz_pattern_build(g->mesh, result->face_panel, result->extra_cuts, NULL, what, &pattern, &ctx);
+    CHECK(status == PZ_OK, "%s: pattern: %s", what, ctx.error);
+    if (pattern)
+        CHECK(pattern->panel_count == result->panel_count, "%s: pattern has %d panels, layout %d", what,
+              (int)pattern->panel_count, (int)result->panel_count);
+    check_darts(g, result, pattern, what);
+    pz_pattern_free(&pattern);
+    printf("%s: %d panels, %d darts, %d curves, %d inserted, %d removed, %d evaluations, %.0f ms\n", what,
+           (int)result->panel_count, (int)result->dart_count, (int)result->curve_count, (int)result->inserted_count,
+           (int)result->removed_count, (int)result->evaluation_count, result->total_ms);
+}
+
+static void test_bodice(void)
+{
+    garment g = generated(PZ_SHAPE_BODICE, 3000);
+    pz_segment_result *base = segment(&g, 0.05, 8, 2, PZ_SYMMETRY_AUTO);
+    check_layout(&g, base, 0.05, 8, "bodice");
+
+    /* Darts where a seam can be partly closed: a pair, mirror images of each other. */
+    CHECK(base->dart_count >= 2 && base->dart_count % 2 == 0, "bodice: %d darts, expected a mirrored pair or more",
+          (int)base->dart_count);
+
+    /* Mirror symmetry about x = 0. */
+    CHECK(base->symmetry.found && base->symmetry.axis == 0, "bodice symmetry not found (axis %d)",
+          base->symmetry.axis);
+    for (int32_t p = 0; p < base->panel_count; ++p) {
+        int32_t m = base->panels[p].mirror_panel;
+        CHECK(m >= 0 && m < base->panel_count && base->panels[m].mirror_panel == p,
+              "bodice panel %d: mirror %d is not mutual", (int)p, (int)m);
+    }
+    double mean_edge = pz_field_mean_edge_length(g.mesh, g.topology);
+    CHECK(base->symmetry_residual_mm >= 0 && base->symmetry_residual_mm < 2 * mean_edge,
+          "bodice layout residual %.2f mm (mean edge %.2f)", base->symmetry_residual_mm, mean_edge);
+
+    /* Same input, another thread count: the same layout. */
+    pz_segment_result *single = segment(&g, 0.05, 8, 1, PZ_SYMMETRY_AUTO);
+    CHECK(single->panel_count == base->panel_count &&
+              memcmp(single->face_panel, base->face_panel, (size_t)g.mesh->face_count * sizeof(int32_t)) == 0 &&
+              memcmp(single->edge_cut, base->edge_cut, (size_t)g.topology->edge_count) == 0,
+          "bodice: 1 and 2 threads differ (%d vs %d panels)", (int)single->panel_count, (int)base->panel_count);
+    pz_segment_result_free(&single);
+
+    /* Stricter goals never give fewer panels. */
+    pz_segment_result *strict = segment(&g, 0.03, 8, 2, PZ_SYMMETRY_AUTO);
+    CHECK(strict->panel_count >= base->panel_count, "bodice: S 0.03 gives %d panels, S 0.05 %d",
+          (int)strict->panel_count, (int)base->panel_count);
+    check_panels(&g, strict, 0.03, 8, "bodice S 0.03");
+    pz_segment_result_free(&strict);
+    pz_segment_result *cornered = segment(&g, 0.05, 6, 2, PZ_SYMMETRY_AUTO);
+    CHECK(cornered->panel_count >= base->panel_count, "bodice: C 6 gives %d panels, C 8 %d",
+          (int)cornered->panel_count, (int)base->panel_count);
+    check_panels(&g, cornered, 0.05, 6, "bodice C 6");
+    pz_segment_result_free(&cornered);
+    pz_segment_result_free(&base);
+    garment_free(&g);
+}
+
+static void test_skirt(void)
+{
+    garment g = generated(PZ_SHAPE_SKIRT, 3000);
+    pz_segment_result *result = segment(&g, 0.05, 8, 0, PZ_SYMMETRY_AUTO);
+    check_layout(&g, result, 0.05, 8, "skirt");
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
+static void test_unreachable(void)
+{
+    garment g = generated(PZ_SHAPE_HEMISPHERE, 800);
+    pz_segment_result *result = segment(&g, 0.0, 8, 0, PZ_SYMMETRY_OFF);
+    CHECK(!result->goals_met, "S = 0 on a hemisphere met");
+    CHECK(strstr(result->reasons, "strain") != NULL, "reasons: '%s'", result->reasons);
+    CHECK(result->panel_count >= 1, "no panel");
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
+/* Two open cylinders side by side, 1 m apart. */
+static void test_two_components(void)
+{
+    pz_generate_options options = {600, 0, 1};
+    pz_mesh *one = NULL, *two = NULL;
+    REQUIRE_OK(pz_generate(PZ_SHAPE_CYLINDER, &options, &one, &ctx), ctx);
+    REQUIRE_OK(pz_mesh_create(2 * one->vertex_count, 2 * one->face_count, &two, &ctx), ctx);
+    for (int copy = 0; copy < 2; ++copy) {
+        for (int32_t i = 0; i < 3 * one->vertex_count; ++i)
+            two->positions[3 * copy * one->vertex_count + i] = one->positions[i] + (i % 3 == 0 ? 1000.0 * copy : 0);
+        for (int32_t i = 0; i < 3 * one->face_count; ++i)
+            two->faces[3 * copy * one->face_count + i] = one->faces[i] + copy * one->vertex_count;
+    }
+    two->unit_scale = 1;
+    pz_mesh_free(&one);
+    garment g = garment_of(two);
+    pz_segment_result *result = segment(&g, 0.05, 8, 0, PZ_SYMMETRY_OFF);
+    int32_t half = g.mesh->face_count / 2;
+    for (int32_t f = 0; f < half; ++f)
+        for (int32_t q = half; q < g.mesh->face_count; q += 97)
+            if (result->face_panel[f] == result->face_panel[q]) {
+                CHECK(0, "panel %d spans both cylinders", (int)result->face_panel[f]);
+                f = half;
+                break;
+            }
+    check_layout(&g, result, 0.05, 8, "two cylinders");
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
+static void test_closed(void)
+{
+    pz_mesh *torus = test_grid(48, 16, TEST_GRID_TORUS, 0, &ctx);
+    for (int32_t i = 0; i < 3 * torus->vertex_count; ++i)
+        torus->positions[i] *= 60.0; /* radii 180 and 60 mm */
+    torus->unit_scale = 1;
+    garment g = garment_of(torus);
+    pz_segment_result *result = segment(&g, 0.05, 8, 0, PZ_SYMMETRY_OFF);
+    CHECK(result->panel_count >= 1 && result->curve_count >= 1, "torus: %d panels, %d curves",
+          (int)result->panel_count, (int)result->curve_count);
+    for (int32_t p = 0; p < result->panel_count; ++p)
+        CHECK(result->panels[p].goals.boundary_loops >= 1, "torus panel %d has no boundary", (int)p);
+    check_panels(&g, result, 0.05, 8, "torus");
+    printf("torus: %d panels, %d darts, %d inserted, %d removed, goals %s (%s)\n", (int)result->panel_count,
+           (int)result->dart_count, (int)result->inserted_count, (int)result->removed_count,
+           result->goals_met ? "met" : "not met", result->reasons);
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
+/* A sketched vertical line down the bodice's centre front (x = 0, -y side) is kept as a seam. */
+static void test_sketch(void)
+{
+    garment g = generated(PZ_SHAPE_BODICE, 3000);
+    enum { LEVELS = 9 };
+    double points[LEVELS * 3];
+    int32_t offsets[2] = {0, LEVELS};
+    for (int l = 0; l < LEVELS; ++l) {
+        double z = 150.0 + 300.0 * l / (LEVELS - 1), best = INFINITY;
+        for (int32_t v = 0; v < g.mesh->vertex_count; ++v) {
+            const double *p = g.mesh->positions + 3 * v;
+            double score = fabs(p[0]) + fabs(p[2] - z);
+            if (p[1] < 0 && score < best) {
+                best = score;
+                memcpy(points + 3 * l, p, 3 * sizeof(double));
+            }
+        }
+    }
+    pz_sketch sketch = {1, offsets, points};
+    pz_segment_options options;
+    pz_segment_options_default(&options);
+    options.sketch = &sketch;
+    pz_segment_result *result = NULL;
+    REQUIRE_OK(pz_segment(g.mesh, g.topology, g.field, &options, &result, &ctx), ctx);
+    double mean_edge = pz_field_mean_edge_length(g.mesh, g.topology), low = INFINITY, high = -INFINITY;
+    int32_t sketched = 0;
+    for (int32_t c = 0; c < result->curve_count; ++c) {
+        const pz_layout_curve *curve = result->curves + c;
+        if (curve->kind != PZ_LAYOUT_SKETCH)
+            continue;
+        ++sketched;
+        for (int32_t i = 0; i < curve->vertex_count; ++i) {
+            const double *p = g.mesh->positions + 3 * curve->vertices[i];
+            CHECK(fabs(p[0]) < 3 * mean_edge, "sketch curve %d strays to x = %.1f", (int)c, p[0]);
+            low = fmin(low, p[2]);
+            high = fmax(high, p[2]);
+        }
+    }
+    CHECK(sketched >= 1, "no sketch curve in the layout");
+    CHECK(low < 150.0 + 2 * mean_edge && high > 450.0 - 2 * mean_edge, "sketch kept from z %.0f to %.0f only", low,
+          high);
+    check_layout(&g, result, 0.05, 8, "bodice with a sketch");
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
+/* A garment of ../shared/data/garments in mm with its field; 0 (and a note) when the data is not there. */
+static int shared_garment(const char *name, garment *out)
+{
+    const char *data = test_shared_data();
+    if (!data) {
+        printf("%s: no ../shared/data, skipped\n", name);
+        return 0;
+    }
+    char path[4096];
+    snprintf(path, sizeof path, "%s/garments/%s", data, name);
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_read(path, &mesh, &ctx), ctx);
+    pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, NULL);
+    REQUIRE_OK(pz_mesh_prepare(mesh, path, PZ_REPAIR_NONE, &ctx), ctx);
+    *out = garment_of(mesh);
+    return 1;
+}
+
+/* The skirt of ../shared/data (grain vertical) gets darts (check_darts). */
+static void test_darts(void)
+{
+    garment g;
+    if (!shared_garment("parafashion-skirt.obj", &g))
+        return;
+    pz_segment_options options;
+    pz_segment_options_default(&options);
+    pz_mesh_vertical_axis(g.mesh, options.grain);
+    pz_segment_result *result = NULL;
+    REQUIRE_OK(pz_segment(g.mesh, g.topology, g.field, &options, &result, &ctx), ctx);
+    CHECK(result->dart_count >= 1, "the skirt got no dart");
+    pz_pattern *pattern = NULL;
+    REQUIRE_OK(pz_pattern_build(g.mesh, result->face_panel, result->extra_cuts, NULL, "skirt", &pattern, &ctx), ctx);
+    check_darts(&g, result, pattern, "shared skirt");
+    printf("skirt: %d panels, %d darts\n", (int)result->panel_count, (int)result->dart_count);
+    pz_pattern_free(&pattern);
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
+/* The wetsuit of ../shared/data (2,274 faces) has a vertex with an angle excess of several radians that no
+ * field-aligned path fixes: the fallback cut through it must let every panel meet the goals. */
+static void test_wetsuit(void)
+{
+    garment g;
+    if (!shared_garment("parafashion-wetsuit.obj", &g))
+        return;
+    pz_segment_result *result = segment(&g, 0.05, 8, 0, PZ_SYMMETRY_AUTO);
+    check_layout(&g, result, 0.05, 8, "wetsuit");
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
+int main(void)
+{
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    test_bodice();
+    test_skirt();
+    test_unreachable();
+    test_two_components();
+    test_closed();
+    test_sketch();
+    test_darts();
+    test_wetsuit();
+    return test_finish();
+}
