@@ -161,6 +161,13 @@ typedef struct pz_textile_options {
      * segment by segment. 0 = 0.05; a huge value keeps every seam a mirror
      * seam (the paper's Eq. 8 everywhere). docs/param.md. */
     double seam_mirror_tolerance;
+    /* The strain goal S (0 = none): every face's |warp| and |weft| strain
+     * should stay within +-S. Faces near it get heavier stretch weights
+     * (reweighted least squares), and when a panel still breaks it after the
+     * iterations, the reflection terms of its seams and darts give way to
+     * equal lengths only and the iterations run again (at most twice).
+     * docs/param.md, "The strain goal". `panelize run` passes --max-strain. */
+    double strain_limit;
 } pz_textile_options;
 
 /** Outcomes that are not errors. */
@@ -173,7 +180,8 @@ typedef struct pz_textile_result {
     double solve_ms;          /* all iterations */
     double iteration_ms;      /* mean per iteration */
     int damped_steps;         /* global steps shortened (backtracked) to keep the energy from rising or faces from flipping */
-    int32_t length_only_seams; /* seams held to equal length only (seam_mirror_tolerance) */
+    int32_t length_only_seams; /* seams held to equal length only (seam_mirror_tolerance, strain_limit) */
+    int32_t length_only_darts; /* darts held to equal legs without axis symmetry (strain_limit) */
 } pz_textile_result;
 
 /**

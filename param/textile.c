@@ -165,15 +165,29 @@ typedef struct textile_state {
     double *pull_target;      /* vertex_count x 2: weighted sums of seam/dart targets */
     int32_t *offsets, *order; /* faces bucketed by panel */
     panel_system *panels;
-    /* Seams that cannot be mirror images (classify_seams): their reflection
-     * term is replaced by equal lengths of facing segments. */
+    /* Equal lengths of facing segments, on every seam and dart (build_segments);
+     * seams that cannot be mirror images (classify_seams, demote_seams) keep
+     * only this term, the others also get the reflection of Eqs. 7-8. */
     double mirror_tolerance;
-    uint8_t *seam_length_only;   /* seam_count */
-    int32_t *seam_segment_base;  /* seam_count: first segment of a length-only seam, -1 otherwise */
-    int32_t segment_count;       /* 2 per consecutive pair of a length-only seam: side a, then side b */
+    uint8_t *seam_length_only;   /* seam_count: 1 = no reflection term */
+    int32_t *seam_segment_base;  /* seam_count: first segment of the seam, -1 when it has none */
+    int32_t *dart_segment_base;  /* dart_count: first segment of the dart, -1 when it has none */
+    uint8_t *dart_length_only;   /* dart_count: 1 = no axis symmetry term (demote_terms) */
+    int32_t segment_count;       /* 2 per facing pair: side a (or leg a), then side b */
     int32_t *segment_ends;       /* segment_count x 2: cut-mesh vertices (from, to) */
     double *segment_target;      /* segment_count x 2: the local step's target for to - from */
-    double *segment_weight;      /* segment_count: the seam's length weight (classify_seams) */
+    double *segment_weight;      /* segment_count */
+    /* Strain goal (options->strain_limit; 0 = none): per face, the stretch
+     * weight's multiplier (update_strain_weights) and the face's worst
+     * |warp| or |weft| strain at the last evaluation. */
+    double strain_limit;
+    double *stretch_boost;       /* face_count, or NULL without a strain goal */
+    double *face_strain;         /* face_count */
+    /* With a strain goal the lengths are a goal too (SEAM_MISMATCH_GOAL):
+     * per seam, then per dart, the relative mismatch of the two sides' 2D
+     * lengths at the last evaluation, over the 3D length of side a. */
+    double *curve_length_3d;     /* seam_count + dart_count */
+    double *curve_mismatch;      /* seam_count + dart_count */
 } textile_state;
 
 /* ------------------------------------------------------------------------ */
@@ -225,6 +239,12 @@ static void state_free(textile_state *state)
     free(state->order);
     free(state->seam_length_only);
     free(state->seam_segment_base);
+    free(state->dart_segment_base);
+    free(state->dart_length_only);
+    free(state->stretch_boost);
+    free(state->face_strain);
+    free(state->curve_length_3d);
+    free(state->curve_mismatch);
     free(state->segment_ends);
     free(state->segment_target);
     free(state->segment_weight);
@@ -508,73 +528,134 @@ static double relative_reflection_residual(const pz_mesh *mesh, const pz_seam *s
 }
 
 /*
- * The weight, per segment pair, of a length-only seam of n pairs, relative
- * to w_seam. A length mismatch D spread evenly along a seam costs the
- * reflection term about w_seam n D^2 / 24 (the misfit grows linearly along
- * the seam and each side moves half of it) and the segment term w D^2 /
- * (2 (n - 1)); equating them makes a length-only seam resist a mismatch as
- * much as a mirror seam does (with w = w_seam the shirt's sleeve caps ended
- * 2.9 % apart).
+ * Weight of one pair of facing segments, relative to w_seam (w_dart for a
+ * dart). A pair's term is w (|e_a| - |e_b|)^2 / 2 in mm^2, like a face's
+ * stretch term w_stretch * area * strain^2: a mismatch d over a segment of
+ * length h strains the band of faces along it by about d / h, which costs the
+ * stretch term about w_stretch h^2 (d / h)^2 = w_stretch d^2, whatever the
+ * resolution. At 100 the seams hold their equal lengths 100x more firmly than
+ * the fabric resists the strain that takes: measured on the shared garments
+ * (docs/param.md), every seam's sides within 0.4 % of each other, against
+ * 2-5 % with the reflection term alone.
  */
-static double length_weight(int32_t n)
+#define SEGMENT_LENGTH_STIFFNESS 100.0
+
+/* Appends the facing segments (a[i], a[i+1]) / (b[i], b[i+1]), i < n - 1,
+ * and, when tip >= 0, (a[n-1], tip) / (b[n-1], tip); returns the first index. */
+static int32_t add_segments(textile_state *state, const int32_t *a, const int32_t *b, int32_t n, int32_t tip,
+                            double weight)
 {
-    return n * (n - 1) / 12.0;
+    int32_t base = state->segment_count;
+    for (int32_t i = 0; i < n; ++i) {
+        if (i + 1 >= n && tip < 0)
+            break;
+        int32_t next_a = i + 1 < n ? a[i + 1] : tip, next_b = i + 1 < n ? b[i + 1] : tip;
+        int32_t *ends = state->segment_ends + 2 * (size_t)state->segment_count;
+        ends[0] = a[i];
+        ends[1] = next_a;
+        ends[2] = b[i];
+        ends[3] = next_b;
+        state->segment_weight[state->segment_count] = weight;
+        state->segment_weight[state->segment_count + 1] = weight;
+        state->segment_count += 2;
+    }
+    return base;
+}
+
+/*
+ * The facing segments of every seam (2 sides) and dart (2 legs, out to the
+ * tip): each pair is held to equal lengths (seam_length_targets), which is
+ * what sewing needs whatever the 2D shapes. 0 when out of memory.
+ */
+static int build_segments(textile_state *state)
+{
+    const pz_pattern *pattern = state->pattern;
+    int32_t ns = pattern->seam_count, nd = pattern->dart_count;
+    size_t pairs = 0;
+    for (int32_t s = 0; s < ns; ++s)
+        pairs += pattern->seams[s].pair_count > 1 ? (size_t)pattern->seams[s].pair_count - 1 : 0;
+    for (int32_t d = 0; d < nd; ++d)
+        pairs += (size_t)pattern->darts[d].pair_count;
+    state->seam_segment_base = malloc(((size_t)ns + 1) * sizeof(int32_t));
+    state->dart_segment_base = malloc(((size_t)nd + 1) * sizeof(int32_t));
+    state->dart_length_only = calloc((size_t)nd + 1, 1);
+    state->segment_ends = malloc(pairs * 4 * sizeof(int32_t) + 1);
+    state->segment_target = calloc(pairs * 4 + 1, sizeof(double));
+    state->segment_weight = malloc(pairs * 2 * sizeof(double) + 1);
+    if (!state->seam_segment_base || !state->dart_segment_base || !state->dart_length_only || !state->segment_ends || !state->segment_target ||
+        !state->segment_weight)
+        return 0;
+    state->segment_count = 0;
+    for (int32_t s = 0; s < ns; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        int usable = seam->pair_count >= 2 && state->w_seam > 0;
+        state->seam_segment_base[s] =
+            usable ? add_segments(state, seam->side_a, seam->side_b, seam->pair_count, -1,
+                                  state->w_seam * SEGMENT_LENGTH_STIFFNESS)
+                   : -1;
+    }
+    for (int32_t d = 0; d < nd; ++d) {
+        const pz_dart *dart = &pattern->darts[d];
+        int usable = dart->pair_count >= 1 && state->w_dart > 0;
+        state->dart_segment_base[d] =
+            usable ? add_segments(state, dart->leg_a, dart->leg_b, dart->pair_count, dart->tip,
+                                  state->w_dart * SEGMENT_LENGTH_STIFFNESS)
+                   : -1;
+    }
+    return 1;
 }
 
 /*
  * Which seams can be mirror images (docs/param.md, "Seams that cannot be
  * mirror images"). At the LSCM start every panel has its own natural flat
  * shape; a seam whose sides are then further from mirror images than
- * mirror_tolerance (relative_reflection_residual) is held to equal lengths of
- * facing segments instead of the reflection: mirror seams (skirt side seams,
- * a sleeve's underarm) measure 0.2-3.6 % on the test garments, a collar band
- * on a neckline 25 %, sleeve caps in armholes 8-10 %, and forcing the latter
- * into reflections takes strains of that order. Builds the segment list and
- * its weights (length_weight). Returns the number of length-only seams, -1
- * when out of memory.
+ * mirror_tolerance (relative_reflection_residual) keeps only its equal
+ * lengths: mirror seams (skirt side seams, a sleeve's underarm) measure
+ * 0.2-3.6 % on the test garments, a collar band on a neckline 25 %, sleeve
+ * caps in armholes 8-10 %, and forcing the latter into reflections takes
+ * strains of that order. Returns the number of length-only seams, -1 when
+ * out of memory.
  */
 static int32_t classify_seams(textile_state *state, const double *uv)
 {
     const pz_pattern *pattern = state->pattern;
-    int32_t ns = pattern->seam_count, pairs = 0, length_only = 0;
+    int32_t ns = pattern->seam_count, length_only = 0;
     state->seam_length_only = calloc((size_t)ns + 1, 1);
-    state->seam_segment_base = malloc(((size_t)ns + 1) * sizeof(int32_t));
-    if (!state->seam_length_only || !state->seam_segment_base)
+    if (!state->seam_length_only)
         return -1;
     for (int32_t s = 0; s < ns; ++s) {
         const pz_seam *seam = &pattern->seams[s];
-        state->seam_segment_base[s] = -1;
         if (seam->pair_count < 2 || state->w_seam <= 0 ||
             !(relative_reflection_residual(pattern->mesh, seam, uv) > state->mirror_tolerance))
             continue;
         state->seam_length_only[s] = 1;
-        state->seam_segment_base[s] = 2 * pairs;
-        pairs += seam->pair_count - 1;
         ++length_only;
     }
-    state->segment_count = 2 * pairs;
-    state->segment_ends = malloc((size_t)state->segment_count * 2 * sizeof(int32_t) + 1);
-    state->segment_target = calloc((size_t)state->segment_count * 2 + 1, sizeof(double));
-    state->segment_weight = malloc((size_t)state->segment_count * sizeof(double) + 1);
-    if (!state->segment_ends || !state->segment_target || !state->segment_weight)
-        return -1;
-    for (int32_t s = 0; s < ns; ++s) {
-        const pz_seam *seam = &pattern->seams[s];
-        if (!state->seam_length_only[s])
-            continue;
-        int32_t n = seam->pair_count, base = state->seam_segment_base[s];
-        double weight = state->w_seam * length_weight(n);
-        for (int32_t g = base; g < base + 2 * (n - 1); ++g)
-            state->segment_weight[g] = weight;
-        int32_t *ends = state->segment_ends + 2 * (size_t)base;
-        for (int32_t i = 0; i + 1 < n; ++i, ends += 4) {
-            ends[0] = seam->side_a[i];
-            ends[1] = seam->side_a[i + 1];
-            ends[2] = seam->side_b[i];
-            ends[3] = seam->side_b[i + 1];
+    return length_only;
+}
+
+/* 3D length of side a of every seam and leg a of every dart (to the tip). */
+static int curve_lengths(textile_state *state)
+{
+    const pz_pattern *pattern = state->pattern;
+    int32_t curves = pattern->seam_count + pattern->dart_count;
+    state->curve_length_3d = calloc((size_t)curves + 1, sizeof(double));
+    state->curve_mismatch = calloc((size_t)curves + 1, sizeof(double));
+    if (!state->curve_length_3d || !state->curve_mismatch)
+        return 0;
+    const double *pos = pattern->mesh->positions;
+    for (int32_t c = 0; c < curves; ++c) {
+        int32_t base = c < pattern->seam_count ? state->seam_segment_base[c]
+                                               : state->dart_segment_base[c - pattern->seam_count];
+        int32_t pairs = c < pattern->seam_count ? pattern->seams[c].pair_count - 1
+                                                : pattern->darts[c - pattern->seam_count].pair_count;
+        for (int32_t g = base; base >= 0 && g < base + 2 * pairs; g += 2) {
+            const double *x = pos + 3 * state->segment_ends[2 * g], *y = pos + 3 * state->segment_ends[2 * g + 1];
+            double d[3] = {x[0] - y[0], x[1] - y[1], x[2] - y[2]};
+            state->curve_length_3d[c] += sqrt(dot3(d, d));
         }
     }
-    return length_only;
+    return 1;
 }
 
 static pz_status state_setup(textile_state *state, const double *uv, int32_t *length_only, pz_ctx *ctx)
@@ -602,8 +683,18 @@ static pz_status state_setup(textile_state *state, const double *uv, int32_t *le
         state->vertex_local[v] = -1;
     for (size_t i = 0; i < 3 * nf; ++i) /* check_panels: every vertex is in one panel */
         state->vertex_panel[mesh->faces[i]] = pattern->face_panel[i / 3];
-    if ((*length_only = classify_seams(state, uv)) < 0)
+    if (!build_segments(state) || (*length_only = classify_seams(state, uv)) < 0)
         return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+    if (state->strain_limit > 0) {
+        state->stretch_boost = malloc(nf * sizeof(double) + 1);
+        state->face_strain = calloc(nf + 1, sizeof(double));
+        if (!state->stretch_boost || !state->face_strain)
+            return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+        for (size_t f = 0; f < nf; ++f)
+            state->stretch_boost[f] = 1;
+        if (!curve_lengths(state))
+            return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+    }
     compute_frames(state);
     pz_status failed = PZ_OK;
     char message[sizeof ctx->error] = "";
@@ -694,7 +785,8 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
             t[e][1] += sn * pe[e][0] + cs * pe[e][1];
         }
     }
-    double energy = 0, stretch_weight = state->w_stretch * area_3d;
+    double energy = 0, stretch_weight = state->w_stretch * area_3d * (state->stretch_boost ? state->stretch_boost[f] : 1);
+    double worst_strain = 0;
     for (int k = 0; k < 2; ++k) {
         terms->s[k] = s[k] / poses;
         if (stretch) {
@@ -702,8 +794,13 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
             for (int i = 0; i < 3; ++i)
                 image += terms->c[k][i] * q[i][k];
             energy += stretch_weight * (terms->s[k] - image) * (terms->s[k] - image);
+            /* image = 1 (c_k are the derivatives of the hat functions along
+             * k), so s_k - 1 is the strain |J_k| - 1 of docs/metrics.md. */
+            worst_strain = fmax(worst_strain, fabs(terms->s[k] - 1));
         }
     }
+    if (state->face_strain)
+        state->face_strain[f] = worst_strain;
     for (int e = 0; e < 3; ++e)
         for (int k = 0; k < 2; ++k) {
             terms->t[e][k] = t[e][k] / poses;
@@ -750,20 +847,21 @@ static double seam_targets(textile_state *state, const pz_seam *seam, const doub
 }
 
 /*
- * A length-only seam (classify_seams): for facing segments e_a = a_{i+1} -
- * a_i and e_b = b_{i+1} - b_i the targets keep each segment's direction and
- * give both the mean length L = (|e_a| + |e_b|) / 2. Those are the minimizers
- * of |e_a - L d_a|^2 + |e_b - L d_b|^2 over unit d_a, d_b and L, so the term
- * is w (|e_a| - |e_b|)^2 / 2 and the local/global step stays a majorization,
+ * Equal lengths of facing segments (build_segments), pairs g = first,
+ * first + 2, ...: for e_a = a_{i+1} - a_i and e_b = b_{i+1} - b_i the targets
+ * keep each segment's direction and give both the mean length
+ * L = (|e_a| + |e_b|) / 2. Those are the minimizers of |e_a - L d_a|^2 +
+ * |e_b - L d_b|^2 over unit d_a, d_b and L, so the term is
+ * w (|e_a| - |e_b|)^2 / 2 and the local/global step stays a majorization,
  * like Procrustes for the rigidity term. Matching segment by segment (not
  * only the totals) keeps facing notches together.
  */
-static double seam_length_targets(textile_state *state, int32_t seam_index, const double *uv)
+static double segment_length_targets(textile_state *state, int32_t first, int32_t pairs, const double *uv,
+                                     double side_length[2])
 {
-    const pz_seam *seam = &state->pattern->seams[seam_index];
     double energy = 0;
-    for (int32_t i = 0; i + 1 < seam->pair_count; ++i) {
-        int32_t g = state->seam_segment_base[seam_index] + 2 * i;
+    side_length[0] = side_length[1] = 0;
+    for (int32_t g = first; g < first + 2 * pairs; g += 2) {
         double w = state->segment_weight[g];
         double length[2], e[2][2];
         for (int side = 0; side < 2; ++side) {
@@ -773,6 +871,8 @@ static double seam_length_targets(textile_state *state, int32_t seam_index, cons
             length[side] = sqrt(e[side][0] * e[side][0] + e[side][1] * e[side][1]);
         }
         double mean = (length[0] + length[1]) / 2;
+        side_length[0] += length[0];
+        side_length[1] += length[1];
         for (int side = 0; side < 2; ++side) {
             const int32_t *ends = state->segment_ends + 2 * (g + side);
             double *target = state->segment_target + 2 * (g + side);
@@ -825,6 +925,12 @@ static double dart_targets(textile_state *state, const pz_dart *dart, const doub
     return energy;
 }
 
+static void record_mismatch(textile_state *state, int32_t curve, const double sides[2])
+{
+    if (state->curve_mismatch && state->curve_length_3d[curve] > 0)
+        state->curve_mismatch[curve] = fabs(sides[0] - sides[1]) / state->curve_length_3d[curve];
+}
+
 /* The whole local step; returns E_textile (Eq. 10) at the current uv. */
 static double local_step(textile_state *state, const double *uv)
 {
@@ -838,11 +944,25 @@ static double local_step(textile_state *state, const double *uv)
     memset(state->pull_weight, 0, (size_t)pattern->mesh->vertex_count * sizeof(double));
     memset(state->pull_target, 0, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
     memset(state->panel_pull, 0, (size_t)pattern->panel_count * sizeof(double));
-    for (int32_t s = 0; s < pattern->seam_count; ++s)
-        energy += state->seam_length_only[s] ? seam_length_targets(state, s, uv)
-                                             : seam_targets(state, &pattern->seams[s], uv);
-    for (int32_t d = 0; d < pattern->dart_count; ++d)
-        energy += dart_targets(state, &pattern->darts[d], uv);
+    double sides[2];
+    for (int32_t s = 0; s < pattern->seam_count; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        if (state->seam_segment_base[s] >= 0) {
+            energy += segment_length_targets(state, state->seam_segment_base[s], seam->pair_count - 1, uv, sides);
+            record_mismatch(state, s, sides);
+        }
+        if (!state->seam_length_only[s])
+            energy += seam_targets(state, seam, uv);
+    }
+    for (int32_t d = 0; d < pattern->dart_count; ++d) {
+        const pz_dart *dart = &pattern->darts[d];
+        if (state->dart_segment_base[d] >= 0) {
+            energy += segment_length_targets(state, state->dart_segment_base[d], dart->pair_count, uv, sides);
+            record_mismatch(state, pattern->seam_count + d, sides);
+        }
+        if (!state->dart_length_only[d])
+            energy += dart_targets(state, dart, uv);
+    }
     return energy;
 }
 
@@ -1074,7 +1194,7 @@ static int solve_coordinate(const textile_state *state, int32_t panel, int k, do
         const int32_t *face = mesh->faces + 3 * f;
         const face_terms *terms = &state->terms[f];
         const double *c = terms->c[k];
-        double w = state->w_stretch * state->areas[f];
+        double w = state->w_stretch * state->areas[f] * (state->stretch_boost ? state->stretch_boost[f] : 1);
         const int32_t *slot = system->slots + 6 * i;
         int32_t local[3] = {state->vertex_local[face[0]], state->vertex_local[face[1]],
                             state->vertex_local[face[2]]};
@@ -1302,6 +1422,156 @@ static double line_search(textile_state *state, step_control *control, double en
 /* Driver                                                                    */
 /* ------------------------------------------------------------------------ */
 
+/* Rounds of demote_terms after the first run of iterations. */
+#define MAX_DEMOTION_ROUNDS 2
+/* A face's stretch weight grows once its strain passes this fraction of the
+ * strain goal (update_strain_weights). */
+#define STRAIN_WEIGHT_ONSET 0.8
+/* Bounds of one update's growth factor and of the accumulated multiplier. */
+#define STRAIN_WEIGHT_STEP_MAX 4.0
+#define STRAIN_WEIGHT_MAX 1000.0
+
+/*
+ * The strain goal as iteratively reweighted least squares: Eq. 5 sums
+ * squared strains, so a few faces can keep a strain well above the goal
+ * while the sum is small (the worst face of a panel, not its mean, decides
+ * whether it meets the goal). Every face whose strain passed
+ * STRAIN_WEIGHT_ONSET x the goal at the last accepted iterate has its
+ * stretch weight multiplied by (strain / onset)^2 (at most
+ * STRAIN_WEIGHT_STEP_MAX per update, STRAIN_WEIGHT_MAX in all). The
+ * multipliers only grow, like the penalty of a constraint, so a face pulled
+ * under the goal stays there. Returns the number of faces changed.
+ */
+static int32_t update_strain_weights(textile_state *state)
+{
+    int32_t nf = state->pattern->mesh->face_count, changed = 0;
+    double onset = STRAIN_WEIGHT_ONSET * state->strain_limit;
+    for (int32_t f = 0; f < nf; ++f) {
+        double strain = state->face_strain[f];
+        if (!(strain > onset) || state->face_flipped[f] || state->stretch_boost[f] >= STRAIN_WEIGHT_MAX)
+            continue;
+        double factor = fmin(STRAIN_WEIGHT_STEP_MAX, (strain / onset) * (strain / onset));
+        state->stretch_boost[f] = fmin(STRAIN_WEIGHT_MAX, state->stretch_boost[f] * factor);
+        ++changed;
+    }
+    return changed;
+}
+
+/* With a strain goal, the seams' and darts' sides should be this close in
+ * length (relative to the 3D length): issue 5's 0.5 %. */
+#define SEAM_MISMATCH_GOAL 0.005
+
+/*
+ * The length goal the same way as the strain goal (update_strain_weights):
+ * the facing segments of a seam or dart whose sides differ by more than
+ * STRAIN_WEIGHT_ONSET x SEAM_MISMATCH_GOAL get heavier, at most
+ * STRAIN_WEIGHT_MAX times their start. The strain reweighting stiffens faces
+ * along seams, and a stiffer fabric resists equal lengths more: both goals
+ * have to grow together. Returns the number of curves changed.
+ */
+static int32_t update_length_weights(textile_state *state)
+{
+    const pz_pattern *pattern = state->pattern;
+    int32_t curves = pattern->seam_count + pattern->dart_count, changed = 0;
+    double onset = STRAIN_WEIGHT_ONSET * SEAM_MISMATCH_GOAL;
+    for (int32_t c = 0; c < curves; ++c) {
+        double mismatch = state->curve_mismatch[c];
+        int is_seam = c < pattern->seam_count;
+        int32_t base = is_seam ? state->seam_segment_base[c] : state->dart_segment_base[c - pattern->seam_count];
+        if (base < 0 || !(mismatch > onset))
+            continue;
+        int32_t pairs = is_seam ? pattern->seams[c].pair_count - 1 : pattern->darts[c - pattern->seam_count].pair_count;
+        double start = (is_seam ? state->w_seam : state->w_dart) * SEGMENT_LENGTH_STIFFNESS;
+        double factor = fmin(STRAIN_WEIGHT_STEP_MAX, (mismatch / onset) * (mismatch / onset));
+        if (state->segment_weight[base] >= STRAIN_WEIGHT_MAX * start)
+            continue;
+        for (int32_t g = base; g < base + 2 * pairs; ++g)
+            state->segment_weight[g] = fmin(STRAIN_WEIGHT_MAX * start, state->segment_weight[g] * factor);
+        ++changed;
+    }
+    return changed;
+}
+
+/*
+ * After a run of iterations with a strain goal: the panels whose worst face
+ * still breaks it lose their reflection terms (mirror seams become
+ * length-only, darts keep their equal legs without the axis symmetry of
+ * Eq. 9). Sewing needs equal lengths, the goal needs the strain; mirror
+ * images are the paper's "ideally" (Sec. 3) and give way. Returns how many
+ * seams and darts were demoted (counted into result->length_only_seams and
+ * result->length_only_darts).
+ */
+static int32_t demote_terms(textile_state *state, pz_textile_result *result)
+{
+    const pz_pattern *pattern = state->pattern;
+    int32_t np = pattern->panel_count, demoted = 0;
+    uint8_t *over = calloc((size_t)np + 1, 1);
+    if (!over)
+        return 0;
+    for (int32_t f = 0; f < pattern->mesh->face_count; ++f)
+        if (state->face_strain[f] > state->strain_limit)
+            over[pattern->face_panel[f]] = 1;
+    for (int32_t s = 0; s < pattern->seam_count; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        if (state->seam_length_only[s] || seam->pair_count < 2)
+            continue;
+        if (over[state->vertex_panel[seam->side_a[0]]] || over[state->vertex_panel[seam->side_b[0]]]) {
+            state->seam_length_only[s] = 1;
+            ++result->length_only_seams;
+            ++demoted;
+        }
+    }
+    for (int32_t d = 0; d < pattern->dart_count; ++d) {
+        const pz_dart *dart = &pattern->darts[d];
+        if (state->dart_length_only[d] || dart->pair_count < 1 || !over[state->vertex_panel[dart->tip]])
+            continue;
+        state->dart_length_only[d] = 1;
+        ++result->length_only_darts;
+        ++demoted;
+    }
+    free(over);
+    return demoted;
+}
+
+/*
+ * Up to `iterations` local/global steps from uv (of energy *energy, already
+ * evaluated into control), each followed by the line search; with a strain
+ * goal the stretch weights are updated after every accepted step (and the
+ * iterate re-evaluated under them, so the line search always compares
+ * energies of one function). Stops on the tolerance only in a step that
+ * changed no weight.
+ */
+static pz_status iterate(textile_state *state, step_control *control, const pz_textile_options *options,
+                         int iterations, double tolerance, double *uv, double *energy, pz_textile_result *outcome,
+                         pz_ctx *ctx)
+{
+    const pz_pattern *pattern = state->pattern;
+    for (int it = 0; it < iterations; ++it) {
+        double previous = *energy;
+        memcpy(control->previous_uv, uv, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
+        pz_status status = global_step(state, uv, ctx);
+        if (status)
+            return status;
+        int damped, stalled;
+        *energy = line_search(state, control, previous, tolerance, uv, &damped, &stalled);
+        outcome->damped_steps += damped;
+        ++outcome->iterations_run;
+        if (options && options->on_iteration)
+            options->on_iteration(options->user, outcome->iterations_run, *energy);
+        int reweighted = 0;
+        if (state->strain_limit > 0 && !stalled && update_strain_weights(state) + update_length_weights(state) > 0) {
+            *energy = evaluate(state, uv);
+            panel_figures(state, control->energy, control->flipped);
+            reweighted = 1;
+        }
+        if (stalled || (!reweighted && fabs(*energy - previous) <= tolerance * previous)) {
+            outcome->converged = 1;
+            break;
+        }
+    }
+    return PZ_OK;
+}
+
 static void read_options(textile_state *state, const pz_textile_options *options, int *iterations, double *tolerance)
 {
     pz_textile_options defaults;
@@ -1334,6 +1604,7 @@ static void read_options(textile_state *state, const pz_textile_options *options
     state->pose_total = 1 + (options->use_poses ? state->pattern->mesh->pose_count : 0);
     state->regularization = 1e-8 * fmax(1.0, state->w_stretch + state->w_rigid);
     state->mirror_tolerance = options->seam_mirror_tolerance > 0 ? options->seam_mirror_tolerance : 0.05;
+    state->strain_limit = options->strain_limit > 0 ? options->strain_limit : 0;
 }
 
 pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *options, double *uv,
@@ -1380,24 +1651,24 @@ pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *
     outcome.initial_energy = energy;
     if (options && options->on_iteration)
         options->on_iteration(options->user, 0, energy);
-    for (int it = 0; it < iterations; ++it) {
-        double previous = energy;
-        memcpy(control.previous_uv, uv, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
-        if ((status = global_step(&state, uv, ctx))) {
-            step_control_free(&control);
-            state_free(&state);
-            return status;
+    /* Round 0 is the paper's iteration; with a strain goal, later rounds
+     * follow only when some panel still breaks it and demote_terms freed
+     * that panel of a symmetry term (docs/param.md, "The strain goal"). */
+    int rounds = state.strain_limit > 0 ? 1 + MAX_DEMOTION_ROUNDS : 1;
+    for (int round = 0; round < rounds && !status; ++round) {
+        if (round > 0) {
+            int32_t demoted = demote_terms(&state, &outcome);
+            if (demoted == 0)
+                break;
+            energy = evaluate(&state, uv);
+            panel_figures(&state, control.energy, control.flipped);
         }
-        int damped, stalled;
-        energy = line_search(&state, &control, previous, tolerance, uv, &damped, &stalled);
-        outcome.damped_steps += damped;
-        outcome.iterations_run = it + 1;
-        if (options && options->on_iteration)
-            options->on_iteration(options->user, it + 1, energy);
-        if (stalled || fabs(energy - previous) <= tolerance * previous) {
-            outcome.converged = 1;
-            break;
-        }
+        status = iterate(&state, &control, options, iterations, tolerance, uv, &energy, &outcome, ctx);
+    }
+    if (status) {
+        step_control_free(&control);
+        state_free(&state);
+        return status;
     }
     outcome.final_energy = energy;
     step_control_free(&control);

@@ -125,6 +125,7 @@ typedef struct flatten_settings {
     double grain[3];
     pz_export_options export_options; /* --seam-allowance ... --gap */
     const char *allowances_path;      /* --allowances FILE, or NULL */
+    double strain_limit;              /* textile's strain goal: run's --max-strain, 0 for flatten */
 } flatten_settings;
 
 /* Exactly `count` comma-separated finite numbers. */
@@ -736,6 +737,7 @@ static pz_status flatten_textile(const flatten_settings *settings, const pz_patt
     options.grain_given = 1;
     memcpy(options.grain, settings->grain, sizeof options.grain);
     options.use_poses = pattern->mesh->pose_count > 0;
+    options.strain_limit = settings->strain_limit;
     return pz_param_textile(pattern, &options, uv, result, ctx);
 }
 
@@ -1065,6 +1067,18 @@ static pz_status build_pieces(const flatten_settings *settings, const pz_flatten
     return status;
 }
 
+/* Asks the extension whether the flattened pattern (rest-pose metrics) is accepted. */
+static pz_status judge_pattern(const pz_flatten_extension *extension, const pz_pattern *pattern, const double *uv,
+                               const pz_fabric *fabric, int *accepted, pz_ctx *ctx)
+{
+    pz_metrics *metrics = NULL;
+    pz_status status = pz_metrics_compute(pattern, uv, 0, fabric, &metrics, ctx);
+    if (status == PZ_OK)
+        *accepted = extension->accept_pattern(extension->user, pattern, metrics);
+    pz_metrics_free(&metrics);
+    return status;
+}
+
 pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
 {
     return pz_flatten_execute(args, NULL, ctx);
@@ -1074,6 +1088,8 @@ pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension
 {
     flatten_settings settings;
     pz_status status = parse_settings(args, &settings, ctx);
+    if (extension)
+        settings.strain_limit = extension->strain_limit;
     if (status != PZ_OK)
         return status;
     flatten_run run;
@@ -1103,19 +1119,34 @@ pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension
         pz_mesh_vertical_axis(input.mesh, settings.grain);
         grain_source = settings.grain[1] > 0.5 ? "vertical axis (y)" : "vertical axis (z)";
     }
-    if (status == PZ_OK)
+    /* The extension may judge the joint flattening and choose panels again (run's final verdict). */
+    for (int round = 0; status == PZ_OK; ++round) {
+        if (round > 0) {
+            pz_springmass_result_clear(&outcome.springmass);
+            memset(&outcome, 0, sizeof outcome);
+            free(uv);
+            uv = NULL;
+            pz_pattern_free(&pattern);
+            panel_choice_clear(&panels);
+        }
         status = choose_panels(args, extension, &input, &panels, ctx);
-    /* run's --darts is on|off, not dart files; it takes no --seams. */
-    if (status == PZ_OK && !extension)
-        status = read_correspondences(args, &input, panels.panel_count, &correspondences, ctx);
-    if (status == PZ_OK)
-        status = pz_pattern_build(input.mesh, panels.face_panel, panels.extra_cuts, &correspondences,
-                                  args->positionals[0], &pattern, ctx);
-    timings[TIME_PATTERN] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
-    if (status == PZ_OK && !(uv = calloc(2 * (size_t)pattern->mesh->vertex_count + 2, sizeof(double))))
-        status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
-    if (status == PZ_OK)
-        status = flatten(&settings, pattern, input.mesh->unit_scale, uv, &outcome, ctx);
+        /* run's --darts is on|off, not dart files; it takes no --seams. */
+        if (status == PZ_OK && !extension && round == 0)
+            status = read_correspondences(args, &input, panels.panel_count, &correspondences, ctx);
+        if (status == PZ_OK)
+            status = pz_pattern_build(input.mesh, panels.face_panel, panels.extra_cuts, &correspondences,
+                                      args->positionals[0], &pattern, ctx);
+        timings[TIME_PATTERN] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
+        if (status == PZ_OK && !(uv = calloc(2 * (size_t)pattern->mesh->vertex_count + 2, sizeof(double))))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+        if (status == PZ_OK)
+            status = flatten(&settings, pattern, input.mesh->unit_scale, uv, &outcome, ctx);
+        int accepted = 1;
+        if (status == PZ_OK && extension && extension->accept_pattern)
+            status = judge_pattern(extension, pattern, uv, &settings.fabric, &accepted, ctx);
+        if (status != PZ_OK || accepted)
+            break;
+    }
     if (status == PZ_OK)
         status = pz_pattern_layout(pattern, uv, LAYOUT_GAP_MM, &layout_moved, ctx);
     timings[TIME_FLATTEN] = pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;

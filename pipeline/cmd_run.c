@@ -93,6 +93,10 @@ typedef struct run_state {
     int32_t layout_count;
     int goals_met;
     char reasons[1024];
+    /* The final verdict (accept_pattern): face-set keys of panels the joint flattening rejected. */
+    uint64_t *vetoed;
+    int32_t vetoed_count;
+    int32_t verdict_rounds;          /* segmentations redone because of them */
 } run_state;
 
 /* ---------------------------------------------------------------- options */
@@ -293,6 +297,12 @@ static pz_status choose_panels(void *user, const pz_mesh *garment, int32_t **fac
             pz_mesh_vertical_axis(garment, options.grain);
         options.on_progress = on_progress;
         options.user = ctx;
+        options.vetoed = state->vetoed;
+        options.vetoed_count = state->vetoed_count;
+        if (state->verdict_rounds > 0)
+            pz_note(ctx, "run: segment again (round %d): %d panels in all failed the joint flattening",
+                    (int)state->verdict_rounds + 1, (int)state->vetoed_count);
+        pz_segment_result_free(&state->segment);
         status = pz_segment(garment, topology, field, &options, &state->segment, ctx);
     }
     state->segment_ms = pz_cli_elapsed_ms(field_end, pz_seconds());
@@ -315,6 +325,54 @@ static pz_status choose_panels(void *user, const pz_mesh *garment, int32_t **fac
     pz_sketch_free(&sketch);
     pz_topology_free(&topology);
     return status;
+}
+
+/*
+ * The final verdict (docs/run.md): the segmentation judged each panel on its
+ * own flattening; the joint flattening couples the panels through their seams
+ * (equal lengths) and can push one past the strain goal or make a dart's legs
+ * cross. Such panels are vetoed (pz_segment_options.vetoed) and the layout is
+ * made again, at most MAX_VERDICT_ROUNDS times; then the last pattern stands,
+ * marked by judge_goals. Returns 1 to accept the pattern.
+ */
+#define MAX_VERDICT_ROUNDS 3
+static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metrics *metrics)
+{
+    run_state *state = user;
+    if (!state->segment || state->verdict_rounds >= MAX_VERDICT_ROUNDS)
+        return 1;
+    int32_t panels = pattern->panel_count, faces = pattern->mesh->face_count, added = 0;
+    int32_t *offsets = calloc((size_t)panels + 2, sizeof(int32_t));
+    int32_t *order = malloc(((size_t)faces + 1) * sizeof(int32_t));
+    uint64_t *grown = realloc(state->vetoed, ((size_t)state->vetoed_count + panels + 1) * sizeof(uint64_t));
+    if (grown)
+        state->vetoed = grown;
+    if (!offsets || !order || !grown) {
+        free(offsets);
+        free(order);
+        return 1;
+    }
+    /* Faces bucketed by panel, each bucket increasing (the key's order). */
+    for (int32_t f = 0; f < faces; ++f)
+        ++offsets[pattern->face_panel[f] + 2];
+    for (int32_t p = 0; p < panels; ++p)
+        offsets[p + 2] += offsets[p + 1];
+    for (int32_t f = 0; f < faces; ++f)
+        order[offsets[pattern->face_panel[f] + 1]++] = f;
+    for (int32_t p = 0; p < panels; ++p) {
+        const pz_panel_metrics *panel = &metrics->panels[p];
+        double strain = fmax(fabs(panel->strain_warp.max), fabs(panel->strain_weft.max));
+        int fails = strain > state->max_strain || panel->flipped_triangles > 0 || panel->boundary_self_intersections > 0;
+        if (fails)
+            state->vetoed[state->vetoed_count + added++] = pz_segment_face_set_key(order + offsets[p], offsets[p + 1] - offsets[p]);
+    }
+    free(offsets);
+    free(order);
+    if (added == 0)
+        return 1;
+    state->vetoed_count += added;
+    ++state->verdict_rounds;
+    return 0;
 }
 
 static const int32_t *panel_mirror(void *user, const pz_pattern *pattern)
@@ -554,6 +612,8 @@ static int extend_segmentation(const run_state *state, cJSON *root)
     ok &= add_number(object, "max_strain", state->max_strain);
     ok &= cJSON_AddBoolToObject(object, "darts", state->darts) != NULL;
     ok &= add_number(object, "field_singularities", state->field_singularities);
+    ok &= add_number(object, "verdict_rounds", state->verdict_rounds);
+    ok &= add_number(object, "vetoed_panels", state->vetoed_count);
     if (!segment)
         return ok;
     ok &= add_number(object, "candidates", segment->candidate_count);
@@ -663,6 +723,7 @@ static void run_state_clear(run_state *state)
     free(state->layout_vertices);
     free(state->layout_offsets);
     free(state->layout_is_dart);
+    free(state->vetoed);
     memset(state, 0, sizeof *state);
 }
 
@@ -682,6 +743,8 @@ pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx)
     extension.prepare_mesh = prepare_mesh;
     extension.choose_panels = choose_panels;
     extension.panels_source = "segmentation";
+    extension.strain_limit = state.max_strain;
+    extension.accept_pattern = accept_pattern;
     extension.panel_mirror = panel_mirror;
     extension.layout_curves = layout_curves;
     extension.extend_report = extend_report;

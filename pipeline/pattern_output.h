@@ -157,6 +157,10 @@ typedef struct pz_flatten_extension {
     pz_status (*choose_panels)(void *user, const pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
                                uint8_t **extra_cuts, pz_ctx *ctx);
     const char *panels_source;           /* report's panels.source for choose_panels ("segmentation") */
+    /* Called after each flattening of the panels choose_panels gave (rest-pose metrics): 1 accepts the
+     * pattern; 0 asks for choose_panels again (the extension remembers why and bounds the rounds). */
+    int (*accept_pattern)(void *user, const pz_pattern *pattern, const pz_metrics *metrics);
+    double strain_limit;                 /* the textile back-end's strain goal (run: --max-strain), 0 = none */
     /* Called once the pattern exists, before any export: the mirror panel of each panel (may return NULL)
      * and the layout curves as garment vertex polylines for garment.glb (may leave them empty). */
     const int32_t *(*panel_mirror)(void *user, const pz_pattern *pattern);

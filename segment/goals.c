@@ -509,6 +509,7 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
         textile.iterations = options->textile_iterations > 0 ? options->textile_iterations
                                                               : DEFAULT_TEXTILE_ITERATIONS;
         textile.threads = 1;
+        textile.strain_limit = options->max_strain;
         textile.grain_given = 1;
         memcpy(textile.grain, options->grain, sizeof textile.grain);
         status = pz_param_textile(pattern, &textile, uv, NULL, ctx);
@@ -637,5 +638,7 @@ void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *optio
         else
             APPEND("outline self-intersects");
     }
+    if (result->failures & PZ_GOAL_VETOED)
+        APPEND("failed in the joint flattening");
 #undef APPEND
 }

@@ -186,6 +186,27 @@ pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx)
     return PZ_OK;
 }
 
+uint64_t pz_segment_face_set_key(const int32_t *faces, int32_t count)
+{
+    uint64_t hash = mix(0xfacade, (uint64_t)count);
+    for (int32_t i = 0; i < count; ++i)
+        hash = mix(hash, (uint64_t)faces[i]);
+    return hash ? hash : 1;
+}
+
+/* 1 when panel p's face set is one of the caller's vetoed panels (a short list: linear scan). */
+static int panel_vetoed(const seg_layout *layout, int32_t p)
+{
+    if (layout->options->vetoed_count <= 0)
+        return 0;
+    int32_t first = layout->panel_offsets[p], count = layout->panel_offsets[p + 1] - first;
+    uint64_t key = pz_segment_face_set_key(layout->panel_faces + first, count);
+    for (int32_t i = 0; i < layout->options->vetoed_count; ++i)
+        if (layout->options->vetoed[i] == key)
+            return 1;
+    return 0;
+}
+
 /* Cache key of panel p: its faces and, for every outline edge, the first face of the panel across. */
 static uint64_t panel_key(const seg_layout *layout, int32_t p)
 {
@@ -302,8 +323,11 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
     for (int32_t i = 0; i < misses && !status; ++i) {
         if (statuses[i])
             status = nomem(ctx);
-        else
+        else {
+            if (panel_vetoed(layout, miss[i]))
+                layout->panel_goals[miss[i]].failures |= PZ_GOAL_VETOED;
             status = cache_store(layout, keys[miss[i]], layout->panel_goals + miss[i], ctx);
+        }
         layout->panel_evaluated[miss[i]] = 1;
     }
     layout->evaluation_count += misses;
@@ -913,7 +937,10 @@ static pz_status make_curves(const seg_layout *layout, pz_segment_result *result
         int tip_last = !s->closed && !t->vertex_on_boundary[last] && seg_cut_degree(layout, last) == 1;
         for (int32_t j = 0; j < n; ++j)
             c->vertices[j] = tip_last && !tip_first ? s->vertices[n - 1 - j] : s->vertices[j];
-        c->kind = s->sketch ? PZ_LAYOUT_SKETCH : (tip_first || tip_last) ? PZ_LAYOUT_DART : PZ_LAYOUT_SEAM;
+        /* A sketched curve that ends inside a panel is a dart of the pattern all the same
+         * (pz_pattern_build makes one of every slit): kind dart, marked sketched. */
+        c->sketched = s->sketch;
+        c->kind = (tip_first || tip_last) ? PZ_LAYOUT_DART : s->sketch ? PZ_LAYOUT_SKETCH : PZ_LAYOUT_SEAM;
         if (c->kind == PZ_LAYOUT_DART) {
             ++result->dart_count;
             int32_t face = pz_he_face(t->edge_halfedge[2 * s->edges[0]]);

@@ -263,7 +263,7 @@ static pz_status panels_ok(seg_layout *layout, const edge_set *set, int *ok, pz_
  */
 static pz_status worth_trying(seg_layout *layout, const edge_set *set, int *worth, pz_ctx *ctx)
 {
-    return panels_pass(layout, set, PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE, worth, ctx);
+    return panels_pass(layout, set, PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED, worth, ctx);
 }
 
 /* ---------------------------------------------------------------- removal */

@@ -96,7 +96,8 @@ enum pz_goal_failure {
     PZ_GOAL_NOT_DISK = 1u << 0,
     PZ_GOAL_CORNERS = 1u << 1,
     PZ_GOAL_STRAIN = 1u << 2,
-    PZ_GOAL_NOT_INJECTIVE = 1u << 3
+    PZ_GOAL_NOT_INJECTIVE = 1u << 3,
+    PZ_GOAL_VETOED = 1u << 4     /* the caller's final flattening rejected this panel (pz_segment_options.vetoed) */
 };
 
 typedef struct pz_goal_options {
@@ -146,6 +147,12 @@ typedef struct pz_segment_options {
     int32_t max_depth;           /* recursion levels into failing panels; 0 = default */
     int threads;                 /* OpenMP threads; 0 = default. The result does not depend on it. */
     pz_trace_graph_options graph;
+    /* Panels known to fail (may be NULL): pz_segment_face_set_key of face sets that a previous
+     * layout's final flattening (all panels jointly, seams coupled) found failing while their own
+     * evaluation passed. A panel with one of these face sets fails with PZ_GOAL_VETOED, so the
+     * layout splits it (or does not merge into it) this time. docs/run.md, "The final verdict". */
+    const uint64_t *vetoed;
+    int32_t vetoed_count;
     /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
      * each insertion, removal and dart with the current panel count and the worst strain among the
      * current panels that have been flattened (0 when none has). */
@@ -155,6 +162,9 @@ typedef struct pz_segment_options {
 
 void pz_segment_options_default(pz_segment_options *options);
 
+/** The key of a panel's face set for pz_segment_options.vetoed: faces[0..count-1] in increasing order. */
+uint64_t pz_segment_face_set_key(const int32_t *faces, int32_t count);
+
 /** A seam path of the final layout, for layout.obj and the report. */
 typedef enum pz_layout_curve_kind {
     PZ_LAYOUT_SEAM = 0,          /* separates two panels (or a panel and itself) */
@@ -163,7 +173,8 @@ typedef enum pz_layout_curve_kind {
 } pz_layout_curve_kind;
 
 typedef struct pz_layout_curve {
-    pz_layout_curve_kind kind;
+    pz_layout_curve_kind kind;   /* a sketched curve that ends inside a panel is a PZ_LAYOUT_DART */
+    int sketched;                /* 1: from a sketch (never removed), whatever its kind */
     int closed;
     int32_t vertex_count;
     int32_t *vertices;           /* garment vertices along cut edges */
