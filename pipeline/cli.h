@@ -65,10 +65,11 @@
 #define PZ_CLI_OPT_FABRIC_WIDTH (UINT64_C(1) << 35) /* --fabric-width MM */
 #define PZ_CLI_OPT_GAP (UINT64_C(1) << 36) /* --gap MM */
 #define PZ_CLI_OPT_DXF_STRICT (UINT64_C(1) << 37) /* --dxf-strict (a flag: stored as the value "1") */
+#define PZ_CLI_OPT_TRUING (UINT64_C(1) << 38) /* --truing on|off (run) */
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 29
+#define PZ_CLI_VALUE_COUNT 30
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;

@@ -592,16 +592,35 @@ static pz_status panels_from_files(const pz_mesh *mesh, panel_choice *choice, pz
     return PZ_OK;
 }
 
+/* The extension's panels; it may move vertices along the surface (run's seam truing): the moved
+ * vertices' garment.obj positions follow, the others keep the file's exact numbers. */
+static pz_status extension_panels(const pz_flatten_extension *extension, garment_input *input, panel_choice *choice,
+                                  pz_ctx *ctx)
+{
+    pz_mesh *mesh = input->mesh;
+    size_t size = (size_t)mesh->vertex_count * 3;
+    double *before = malloc(size * sizeof(double) + 1);
+    if (!before)
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    memcpy(before, mesh->positions, size * sizeof(double));
+    choice->source = extension->panels_source ? extension->panels_source : "extension";
+    pz_status status = extension->choose_panels(extension->user, mesh, &choice->face_panel, &choice->panel_count,
+                                                &choice->extra_cuts, ctx);
+    for (size_t v = 0; status == PZ_OK && v < size / 3; ++v)
+        if (memcmp(before + 3 * v, mesh->positions + 3 * v, 3 * sizeof(double)) != 0)
+            for (int d = 0; d < 3; ++d)
+                input->output_positions[3 * v + d] = mesh->positions[3 * v + d] / mesh->unit_scale;
+    free(before);
+    return status;
+}
+
 static pz_status choose_panels(const pz_cli_args *args, const pz_flatten_extension *extension,
-                               const garment_input *input, panel_choice *choice, pz_ctx *ctx)
+                               garment_input *input, panel_choice *choice, pz_ctx *ctx)
 {
     const pz_mesh *mesh = input->mesh;
     const char *panels = pz_cli_value(args, PZ_CLI_OPT_PANELS);
-    if (!panels && extension && extension->choose_panels) {
-        choice->source = extension->panels_source ? extension->panels_source : "extension";
-        return extension->choose_panels(extension->user, mesh, &choice->face_panel, &choice->panel_count,
-                                        &choice->extra_cuts, ctx);
-    }
+    if (!panels && extension && extension->choose_panels)
+        return extension_panels(extension, input, choice, ctx);
     if (panels && strcmp(panels, "uv") == 0) {
         if (!mesh->uvs || !mesh->corner_uvs)
             return pz_error(ctx, PZ_ERR_DATA, "%s: --panels uv: the mesh has no UVs (vt)", args->positionals[0]);

@@ -36,7 +36,7 @@
 const char pz_cli_run_usage[] =
     "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S]\n"
     "           [--pose FILE]... [--sketch FILE] [--panels FILE|uv]\n"
-    "           [--symmetry auto|off|x|y|z] [--darts on|off] [--grain X,Y,Z]\n"
+    "           [--symmetry auto|off|x|y|z] [--darts on|off] [--truing on|off] [--grain X,Y,Z]\n"
     "           [--prepare auto|off] [--backend textile|lscm|wirewarp|springmass]\n"
     "           [--iterations N] [--weights S,R,D,M] [--fabric KSU,KSV,KR]\n"
     "           [--seam-allowance MM] [--hem-allowance MM] [--allowances FILE]\n"
@@ -55,6 +55,9 @@ const char pz_cli_run_usage[] =
     "                       (default 0.05: 5% in tension or compression)\n"
     "  --symmetry M         auto (default: detect a mirror plane), off, x, y or z\n"
     "  --darts on|off       insert darts where a seam can be partly closed (default on)\n"
+    "  --truing on|off      smooth the seams traced along mesh edges into clean lines\n"
+    "                       by moving their vertices along the surface (default on;\n"
+    "                       off keeps garment.obj's positions exactly the input's)\n"
     "  --sketch FILE        JSON {\"curves\": [[[x,y,z], ...], ...]} in the garment's\n"
     "                       units: curves that become seams, never removed\n"
     "  --panels FILE|uv     the user's own panels (see panelize flatten): no\n"
@@ -96,6 +99,10 @@ typedef struct run_state {
     /* The final verdict (accept_pattern): face-set keys of panels the joint flattening rejected. */
     uint64_t *vetoed;
     int32_t vetoed_count;
+    /* Seam truing (on by default): the garment before it, and what it did. */
+    int truing;
+    double *original_positions, *original_poses;
+    pz_truing_result truing_result;
     int32_t verdict_rounds;          /* segmentations redone because of them */
 } run_state;
 
@@ -106,6 +113,7 @@ static pz_status parse_run_options(const pz_cli_args *args, run_state *state, pz
     state->max_corners = DEFAULT_MAX_CORNERS;
     state->max_strain = DEFAULT_MAX_STRAIN;
     state->darts = 1;
+    state->truing = 1;
     state->prepare_auto = 1;
     const char *text;
     if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_CORNERS))) {
@@ -146,6 +154,11 @@ static pz_status parse_run_options(const pz_cli_args *args, run_state *state, pz
         if (strcmp(text, "auto") != 0 && strcmp(text, "off") != 0)
             return pz_error(ctx, PZ_ERR_USAGE, "run: --prepare: '%s' is not auto or off", text);
         state->prepare_auto = strcmp(text, "auto") == 0;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_TRUING))) {
+        if (strcmp(text, "on") != 0 && strcmp(text, "off") != 0)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --truing: '%s' is not on or off", text);
+        state->truing = strcmp(text, "on") == 0;
     }
     if (pz_cli_value(args, PZ_CLI_OPT_PANELS))
         state->prepare_auto = 0;  /* the user's panels refer to the input's faces as they are */
@@ -262,10 +275,33 @@ static pz_status gather_sketch(const run_state *state, const pz_mesh *mesh, pz_s
     return PZ_OK;
 }
 
-static pz_status choose_panels(void *user, const pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
+/* The garment as it was before the first truing (each verdict round segments the original surface). */
+static pz_status keep_or_restore_original(run_state *state, pz_mesh *garment, pz_ctx *ctx)
+{
+    size_t positions = (size_t)garment->vertex_count * 3, poses = positions * (size_t)garment->pose_count;
+    if (state->original_positions) {
+        memcpy(garment->positions, state->original_positions, positions * sizeof(double));
+        if (poses)
+            memcpy(garment->poses, state->original_poses, poses * sizeof(double));
+        return PZ_OK;
+    }
+    state->original_positions = malloc(positions * sizeof(double) + 1);
+    state->original_poses = malloc(poses * sizeof(double) + 1);
+    if (!state->original_positions || !state->original_poses)
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    memcpy(state->original_positions, garment->positions, positions * sizeof(double));
+    if (poses)
+        memcpy(state->original_poses, garment->poses, poses * sizeof(double));
+    return PZ_OK;
+}
+
+static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
                                uint8_t **extra_cuts, pz_ctx *ctx)
 {
     run_state *state = user;
+    pz_status restored = keep_or_restore_original(state, garment, ctx);
+    if (restored != PZ_OK)
+        return restored;
     pz_topology *topology = NULL;
     pz_sketch *sketch = NULL;
     pz_field *field = NULL;
@@ -306,6 +342,14 @@ static pz_status choose_panels(void *user, const pz_mesh *garment, int32_t **fac
         status = pz_segment(garment, topology, field, &options, &state->segment, ctx);
     }
     state->segment_ms = pz_cli_elapsed_ms(field_end, pz_seconds());
+    if (status == PZ_OK && state->truing) {
+        status = pz_segment_true_seams(garment, topology, state->segment->edge_cut, NULL, &state->truing_result, ctx);
+        if (status == PZ_OK)
+            pz_note(ctx, "run: truing: %d seam vertices moved (at most %.1f mm), %d neighbours relaxed; "
+                    "mean turn between seam edges %.1f -> %.1f degrees", (int)state->truing_result.moved_vertices,
+                    state->truing_result.max_move_mm, (int)state->truing_result.relaxed_vertices,
+                    state->truing_result.mean_turn_before_deg, state->truing_result.mean_turn_after_deg);
+    }
     if (status == PZ_OK) {
         const pz_segment_result *segment = state->segment;
         size_t faces = (size_t)garment->face_count, edges = (size_t)topology->edge_count;
@@ -613,6 +657,16 @@ static int extend_segmentation(const run_state *state, cJSON *root)
     ok &= cJSON_AddBoolToObject(object, "darts", state->darts) != NULL;
     ok &= add_number(object, "field_singularities", state->field_singularities);
     ok &= add_number(object, "verdict_rounds", state->verdict_rounds);
+    cJSON *truing = cJSON_AddObjectToObject(object, "truing");
+    ok &= truing != NULL && cJSON_AddBoolToObject(truing, "on", state->truing) != NULL;
+    if (truing && state->truing) {
+        const pz_truing_result *t = &state->truing_result;
+        ok &= add_number(truing, "moved_vertices", t->moved_vertices);
+        ok &= add_number(truing, "relaxed_vertices", t->relaxed_vertices);
+        ok &= add_number(truing, "max_move_mm", pz_cli_round(t->max_move_mm, 3));
+        ok &= add_number(truing, "mean_turn_before_deg", pz_cli_round(t->mean_turn_before_deg, 2));
+        ok &= add_number(truing, "mean_turn_after_deg", pz_cli_round(t->mean_turn_after_deg, 2));
+    }
     ok &= add_number(object, "vetoed_panels", state->vetoed_count);
     if (!segment)
         return ok;
@@ -724,6 +778,8 @@ static void run_state_clear(run_state *state)
     free(state->layout_offsets);
     free(state->layout_is_dart);
     free(state->vetoed);
+    free(state->original_positions);
+    free(state->original_poses);
     memset(state, 0, sizeof *state);
 }
 

@@ -50,7 +50,7 @@ static const pz_cli_command command_table[] = {
          PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |
          PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |
          PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |
-         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_EXPORT,
+         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_EXPORT,
      pz_cli_run},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
@@ -111,6 +111,7 @@ static const option_spec option_table[] = {
     {"fabric-width", 0, PZ_CLI_OPT_FABRIC_WIDTH, 1},
     {"gap", 0, PZ_CLI_OPT_GAP, 1},
     {"dxf-strict", 0, PZ_CLI_OPT_DXF_STRICT, 0},
+    {"truing", 0, PZ_CLI_OPT_TRUING, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 

@@ -154,7 +154,9 @@ typedef struct pz_flatten_extension {
     pz_status (*prepare_mesh)(void *user, pz_mesh **mesh, int *changed, pz_ctx *ctx);
     /* Panels for a garment without --panels: face_panel (face_count, malloc'd, the caller frees),
      * *panel_count, *extra_cuts (edge flags over pz_topology_build(garment), malloc'd or NULL). */
-    pz_status (*choose_panels)(void *user, const pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
+    /* May move vertices along the surface (seam truing: connectivity, face order and units unchanged);
+     * called again after accept_pattern said no, on the garment as the previous call left it. */
+    pz_status (*choose_panels)(void *user, pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
                                uint8_t **extra_cuts, pz_ctx *ctx);
     const char *panels_source;           /* report's panels.source for choose_panels ("segmentation") */
     /* Called after each flattening of the panels choose_panels gave (rest-pose metrics): 1 accepts the

@@ -225,6 +225,38 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
                      const pz_segment_options *options, pz_segment_result **out, pz_ctx *ctx);
 void pz_segment_result_free(pz_segment_result **result);
 
+/* ------------------------------------------------------------------------ */
+/* Seam truing                                                               */
+/* ------------------------------------------------------------------------ */
+
+typedef struct pz_truing_options {
+    int passes;                  /* Taubin lambda/mu passes along each chain; 0 = 20 */
+    double max_move_rel;         /* a vertex moves at most this times its shortest edge; 0 = 0.5 */
+    double corner_deg;           /* chain vertices turning more than this over 3 edges each way stay; 0 = 50 (as the corners of docs/segment.md) */
+} pz_truing_options;
+
+typedef struct pz_truing_result {
+    int32_t chain_count;         /* chains of cut edges between nodes (or closed loops) */
+    int32_t moved_vertices;      /* chain vertices moved onto the smoothed seams */
+    int32_t relaxed_vertices;    /* their neighbours moved to keep the triangles well shaped */
+    double mean_turn_before_deg; /* mean turning angle between consecutive cut edges, before and after */
+    double mean_turn_after_deg;
+    double max_move_mm;          /* the largest displacement of a vertex */
+} pz_truing_result;
+
+/**
+ * Seam truing (docs/segment.md, "Truing"): moves the vertices of every chain of
+ * cut edges (edge_cut over `topology` edges) onto a smoothed copy of the chain,
+ * projected onto the original surface, and relaxes their neighbours; chain
+ * ends, border vertices and corners stay. Connectivity and face order are
+ * unchanged; mesh->positions and every pose in mesh->poses are updated in
+ * place (poses by the barycentric position of each moved vertex on the
+ * original surface). result may be NULL. Errors: PZ_ERR_USAGE, PZ_ERR_NOMEM
+ * (the mesh is then left partly moved: callers keep a copy if they need one).
+ */
+pz_status pz_segment_true_seams(pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
+                                const pz_truing_options *options, pz_truing_result *result, pz_ctx *ctx);
+
 #ifdef __cplusplus
 }
 #endif
