@@ -402,6 +402,34 @@ static void measure_edges(const pz_pattern *pattern, const pz_topology *t, const
     }
 }
 
+static segment outline_segment(const double *uv, int32_t a, int32_t b)
+{
+    const double *pa = uv + 2 * a, *pb = uv + 2 * b;
+    segment s = {0};
+    int swap = pa[0] > pb[0];
+    s.x0 = swap ? pb[0] : pa[0];
+    s.y0 = swap ? pb[1] : pa[1];
+    s.x1 = swap ? pa[0] : pb[0];
+    s.y1 = swap ? pa[1] : pb[1];
+    s.ylo = fmin(pa[1], pb[1]);
+    s.yhi = fmax(pa[1], pb[1]);
+    s.a = a;
+    s.b = b;
+    return s;
+}
+
+int32_t pz_metrics_outline_crossings(const int32_t *edges, int32_t count, const double *uv)
+{
+    segment *segments = malloc((size_t)count * sizeof(segment) + 1);
+    if (!segments)
+        return -1;
+    for (int32_t i = 0; i < count; ++i)
+        segments[i] = outline_segment(uv, edges[2 * i], edges[2 * i + 1]);
+    int32_t crossings = count_crossings(segments, count);
+    free(segments);
+    return crossings;
+}
+
 /* Boundary self-intersections of every panel (only within a panel: pieces are laid out apart). */
 static int count_panel_crossings(const pz_pattern *pattern, const pz_topology *t, const double *uv, pz_metrics *m)
 {
@@ -419,19 +447,7 @@ static int count_panel_crossings(const pz_pattern *pattern, const pz_topology *t
     for (int32_t h = 0; ok && h < t->halfedge_count; ++h) {
         if (t->twin[h] >= 0)
             continue;
-        int32_t a = pz_he_from(t, h), b = pz_he_to(t, h);
-        const double *pa = uv + 2 * a, *pb = uv + 2 * b;
-        segment s = {0};
-        int swap = pa[0] > pb[0];
-        s.x0 = swap ? pb[0] : pa[0];
-        s.y0 = swap ? pb[1] : pa[1];
-        s.x1 = swap ? pa[0] : pb[0];
-        s.y1 = swap ? pa[1] : pb[1];
-        s.ylo = fmin(pa[1], pb[1]);
-        s.yhi = fmax(pa[1], pb[1]);
-        s.a = a;
-        s.b = b;
-        segments[fill[pattern->face_panel[pz_he_face(h)]]++] = s;
+        segments[fill[pattern->face_panel[pz_he_face(h)]]++] = outline_segment(uv, pz_he_from(t, h), pz_he_to(t, h));
     }
     for (int32_t p = 0; ok && p < pattern->panel_count; ++p) {
         int32_t crossings = count_crossings(segments + offsets[p], offsets[p + 1] - offsets[p]);

@@ -360,6 +360,15 @@ pz_status pz_metrics_compute(const pz_pattern *pattern, const double *uv, int po
 void pz_metrics_free(pz_metrics **metrics);
 
 /**
+ * Pairs of outline edges that meet (cross, touch or overlap) without sharing a
+ * vertex: the boundary self-intersections of pz_metrics_compute for one set of
+ * edges. edges: count x 2 vertex ids into uv (vertex_count x 2). A sweep over
+ * the edges sorted by x, O(n log n) plus the pairs whose x-ranges overlap.
+ * Returns -1 when out of memory.
+ */
+int32_t pz_metrics_outline_crossings(const int32_t *edges, int32_t count, const double *uv);
+
+/**
  * Per-triangle strain of one triangle: p3[3][3] garment positions, p2[3][2]
  * pattern positions. Writes warp and weft strain (|J_1| - 1, |J_2| - 1) and
  * shear in degrees; the building block the tests check by hand.

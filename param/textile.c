@@ -164,6 +164,8 @@ typedef struct textile_state {
     double *pull_weight;      /* vertex_count: summed seam/dart weights */
     double *pull_target;      /* vertex_count x 2: weighted sums of seam/dart targets */
     int32_t *offsets, *order; /* faces bucketed by panel */
+    int32_t *outline_offsets; /* panel_count + 1: each panel's outline edges in outline_edges */
+    int32_t *outline_edges;   /* 2 vertex ids per outline (boundary) edge of the cut mesh */
     panel_system *panels;
     /* Equal lengths of facing segments, on every seam and dart (build_segments);
      * seams that cannot be mirror images (classify_seams, demote_seams) keep
@@ -237,6 +239,8 @@ static void state_free(textile_state *state)
     free(state->pull_target);
     free(state->offsets);
     free(state->order);
+    free(state->outline_offsets);
+    free(state->outline_edges);
     free(state->seam_length_only);
     free(state->seam_segment_base);
     free(state->dart_segment_base);
@@ -634,6 +638,40 @@ static int32_t classify_seams(textile_state *state, const double *uv)
     return length_only;
 }
 
+/* The outline edges of every panel (boundary half-edges of the cut mesh), for the crossing test. */
+static pz_status build_outlines(textile_state *state, pz_ctx *ctx)
+{
+    const pz_pattern *pattern = state->pattern;
+    pz_topology *topology = NULL;
+    pz_status status = pz_topology_build(pattern->mesh, &topology, ctx);
+    if (status)
+        return status;
+    int32_t np = pattern->panel_count;
+    state->outline_offsets = calloc((size_t)np + 2, sizeof(int32_t));
+    int32_t boundary = 0;
+    for (int32_t h = 0; h < topology->halfedge_count; ++h)
+        boundary += topology->twin[h] < 0;
+    state->outline_edges = malloc((size_t)boundary * 2 * sizeof(int32_t) + 1);
+    if (!state->outline_offsets || !state->outline_edges) {
+        pz_topology_free(&topology);
+        return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+    }
+    for (int32_t h = 0; h < topology->halfedge_count; ++h)
+        if (topology->twin[h] < 0)
+            ++state->outline_offsets[pattern->face_panel[pz_he_face(h)] + 2];
+    for (int32_t p = 0; p < np; ++p)
+        state->outline_offsets[p + 2] += state->outline_offsets[p + 1];
+    for (int32_t h = 0; h < topology->halfedge_count; ++h) {
+        if (topology->twin[h] >= 0)
+            continue;
+        int32_t slot = state->outline_offsets[pattern->face_panel[pz_he_face(h)] + 1]++;
+        state->outline_edges[2 * slot] = pz_he_from(topology, h);
+        state->outline_edges[2 * slot + 1] = pz_he_to(topology, h);
+    }
+    pz_topology_free(&topology);
+    return PZ_OK;
+}
+
 /* 3D length of side a of every seam and leg a of every dart (to the tip). */
 static int curve_lengths(textile_state *state)
 {
@@ -685,6 +723,9 @@ static pz_status state_setup(textile_state *state, const double *uv, int32_t *le
         state->vertex_panel[mesh->faces[i]] = pattern->face_panel[i / 3];
     if (!build_segments(state) || (*length_only = classify_seams(state, uv)) < 0)
         return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
+    pz_status outlined = build_outlines(state, ctx);
+    if (outlined)
+        return outlined;
     if (state->strain_limit > 0) {
         state->stretch_boost = malloc(nf * sizeof(double) + 1);
         state->face_strain = calloc(nf + 1, sizeof(double));
@@ -1288,8 +1329,9 @@ static double evaluate(textile_state *state, double *uv)
 }
 
 /* Per panel: its energy (faces + seam and dart pulls on its vertices) and
- * its collapsed or mirrored faces, from the last evaluation. */
-static void panel_figures(const textile_state *state, double *energy, int32_t *flipped)
+ * its defects: collapsed or mirrored faces, from the last evaluation, plus
+ * crossings of its outline at uv. */
+static void panel_figures(const textile_state *state, const double *uv, double *energy, int32_t *flipped)
 {
     const pz_pattern *pattern = state->pattern;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
@@ -1302,7 +1344,11 @@ static void panel_figures(const textile_state *state, double *energy, int32_t *f
             count += state->face_flipped[state->order[i]];
         }
         energy[p] = sum;
-        flipped[p] = count;
+        /* Outline crossings count as defects like flipped faces: the line search never adds one
+         * (a dart closing past zero, a boundary folding over itself cannot be cut). */
+        int32_t first = state->outline_offsets[p], edges = state->outline_offsets[p + 1] - first;
+        int32_t crossings = pz_metrics_outline_crossings(state->outline_edges + 2 * (size_t)first, edges, uv);
+        flipped[p] = count + (crossings > 0 ? crossings : 0);
     }
 }
 
@@ -1383,7 +1429,7 @@ static double line_search(textile_state *state, step_control *control, double en
     *damped = *stalled = 0;
     for (int halving = 0;; ++halving) {
         double trial = evaluate(state, uv);
-        panel_figures(state, control->trial_energy, control->trial_flipped);
+        panel_figures(state, uv, control->trial_energy, control->trial_flipped);
         int new_flips = 0;
         for (int32_t p = 0; p < np; ++p)
             new_flips |= control->trial_flipped[p] > control->allowed_flipped[p];
@@ -1561,7 +1607,7 @@ static pz_status iterate(textile_state *state, step_control *control, const pz_t
         int reweighted = 0;
         if (state->strain_limit > 0 && !stalled && update_strain_weights(state) + update_length_weights(state) > 0) {
             *energy = evaluate(state, uv);
-            panel_figures(state, control->energy, control->flipped);
+            panel_figures(state, uv, control->energy, control->flipped);
             reweighted = 1;
         }
         if (stalled || (!reweighted && fabs(*energy - previous) <= tolerance * previous)) {
@@ -1646,7 +1692,7 @@ pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *
     double solve_start = pz_seconds();
     outcome.init_ms = 1e3 * (solve_start - start);
     double energy = evaluate(&state, uv);
-    panel_figures(&state, control.energy, control.flipped);
+    panel_figures(&state, uv, control.energy, control.flipped);
     memcpy(control.allowed_flipped, control.flipped, (size_t)pattern->panel_count * sizeof(int32_t));
     outcome.initial_energy = energy;
     if (options && options->on_iteration)
@@ -1661,7 +1707,7 @@ pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *
             if (demoted == 0)
                 break;
             energy = evaluate(&state, uv);
-            panel_figures(&state, control.energy, control.flipped);
+            panel_figures(&state, uv, control.energy, control.flipped);
         }
         status = iterate(&state, &control, options, iterations, tolerance, uv, &energy, &outcome, ctx);
     }

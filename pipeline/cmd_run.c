@@ -104,6 +104,8 @@ typedef struct run_state {
     double *original_positions, *original_poses;
     pz_truing_result truing_result;
     int32_t verdict_rounds;          /* segmentations redone because of them */
+    pz_segment_cache *segment_cache; /* evaluations shared by the rounds */
+    char verdict_reasons[512];       /* the last rejection's panels, for the progress note */
 } run_state;
 
 /* ---------------------------------------------------------------- options */
@@ -335,11 +337,15 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
         options.user = ctx;
         options.vetoed = state->vetoed;
         options.vetoed_count = state->vetoed_count;
+        if (!state->segment_cache && !(state->segment_cache = pz_segment_cache_create()))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+        options.cache = state->segment_cache;
         if (state->verdict_rounds > 0)
-            pz_note(ctx, "run: segment again (round %d): %d panels in all failed the joint flattening",
-                    (int)state->verdict_rounds + 1, (int)state->vetoed_count);
+            pz_note(ctx, "run: segment again (round %d): the joint flattening rejected %s",
+                    (int)state->verdict_rounds + 1, state->verdict_reasons);
         pz_segment_result_free(&state->segment);
-        status = pz_segment(garment, topology, field, &options, &state->segment, ctx);
+        if (status == PZ_OK)
+            status = pz_segment(garment, topology, field, &options, &state->segment, ctx);
     }
     state->segment_ms = pz_cli_elapsed_ms(field_end, pz_seconds());
     if (status == PZ_OK && state->truing) {
@@ -386,6 +392,7 @@ static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metric
     if (!state->segment || state->verdict_rounds >= MAX_VERDICT_ROUNDS)
         return 1;
     int32_t panels = pattern->panel_count, faces = pattern->mesh->face_count, added = 0;
+    state->verdict_reasons[0] = '\0';
     int32_t *offsets = calloc((size_t)panels + 2, sizeof(int32_t));
     int32_t *order = malloc(((size_t)faces + 1) * sizeof(int32_t));
     uint64_t *grown = realloc(state->vetoed, ((size_t)state->vetoed_count + panels + 1) * sizeof(uint64_t));
@@ -407,8 +414,15 @@ static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metric
         const pz_panel_metrics *panel = &metrics->panels[p];
         double strain = fmax(fabs(panel->strain_warp.max), fabs(panel->strain_weft.max));
         int fails = strain > state->max_strain || panel->flipped_triangles > 0 || panel->boundary_self_intersections > 0;
-        if (fails)
-            state->vetoed[state->vetoed_count + added++] = pz_segment_face_set_key(order + offsets[p], offsets[p + 1] - offsets[p]);
+        if (!fails)
+            continue;
+        state->vetoed[state->vetoed_count + added++] = pz_segment_face_set_key(order + offsets[p], offsets[p + 1] - offsets[p]);
+        /* Why, for the note choose_panels prints next round. */
+        size_t used = strlen(state->verdict_reasons);
+        snprintf(state->verdict_reasons + used, sizeof state->verdict_reasons - used,
+                 "%spanel %d (%d faces): strain %.4f, %d flipped, %d outline crossings", used ? "; " : "", (int)p,
+                 (int)(offsets[p + 1] - offsets[p]), strain, (int)panel->flipped_triangles,
+                 (int)panel->boundary_self_intersections);
     }
     free(offsets);
     free(order);
@@ -778,6 +792,7 @@ static void run_state_clear(run_state *state)
     free(state->layout_offsets);
     free(state->layout_is_dart);
     free(state->vetoed);
+    pz_segment_cache_free(&state->segment_cache);
     free(state->original_positions);
     free(state->original_poses);
     memset(state, 0, sizeof *state);

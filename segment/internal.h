@@ -20,8 +20,14 @@ typedef struct seg_path {
 /* One cached evaluation: key 0 = empty slot. */
 typedef struct seg_cache_entry {
     uint64_t key;
-    pz_goal_result goals;
+    pz_goal_result goals;     /* as evaluated, before any veto */
 } seg_cache_entry;
+
+/* The evaluation cache (open addressing, power-of-two capacity); pz_segment_cache to the public. */
+struct pz_segment_cache {
+    seg_cache_entry *entries;
+    int32_t capacity, count;
+};
 
 /* A maximal chain of cut edges between nodes (vertices whose cut degree is not 2, or on the border). */
 typedef struct seg_segment {
@@ -62,8 +68,8 @@ typedef struct seg_layout {
     int32_t *panel_faces;    /* face_count, each panel's faces increasing */
     pz_goal_result *panel_goals;
     uint8_t *panel_evaluated;
-    seg_cache_entry *cache;
-    int32_t cache_capacity, cache_count;
+    pz_segment_cache *cache;     /* options->cache, or own_cache */
+    pz_segment_cache own_cache;
     int32_t evaluation_count;
     int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
     double mean_edge;

@@ -228,37 +228,51 @@ static uint64_t panel_key(const seg_layout *layout, int32_t p)
     return hash ? hash : 1;
 }
 
-static seg_cache_entry *cache_slot(seg_layout *layout, uint64_t key)
+static seg_cache_entry *cache_slot(pz_segment_cache *cache, uint64_t key)
 {
-    int32_t mask = layout->cache_capacity - 1;
+    int32_t mask = cache->capacity - 1;
     for (int32_t i = (int32_t)(key & (uint64_t)mask);; i = (i + 1) & mask)
-        if (layout->cache[i].key == key || layout->cache[i].key == 0)
-            return layout->cache + i;
+        if (cache->entries[i].key == key || cache->entries[i].key == 0)
+            return cache->entries + i;
 }
 
-static pz_status cache_store(seg_layout *layout, uint64_t key, const pz_goal_result *goals, pz_ctx *ctx)
+static pz_status cache_store(pz_segment_cache *cache, uint64_t key, const pz_goal_result *goals, pz_ctx *ctx)
 {
-    if (2 * (layout->cache_count + 1) > layout->cache_capacity) {
-        int32_t old_capacity = layout->cache_capacity;
-        seg_cache_entry *old = layout->cache;
-        layout->cache_capacity = old_capacity ? 2 * old_capacity : 256;
-        layout->cache = calloc((size_t)layout->cache_capacity, sizeof(seg_cache_entry));
-        if (!layout->cache) {
-            layout->cache = old;
-            layout->cache_capacity = old_capacity;
+    if (2 * (cache->count + 1) > cache->capacity) {
+        int32_t old_capacity = cache->capacity;
+        seg_cache_entry *old = cache->entries;
+        cache->capacity = old_capacity ? 2 * old_capacity : 256;
+        cache->entries = calloc((size_t)cache->capacity, sizeof(seg_cache_entry));
+        if (!cache->entries) {
+            cache->entries = old;
+            cache->capacity = old_capacity;
             return nomem(ctx);
         }
         for (int32_t i = 0; i < old_capacity; ++i)
             if (old[i].key)
-                *cache_slot(layout, old[i].key) = old[i];
+                *cache_slot(cache, old[i].key) = old[i];
         free(old);
     }
-    seg_cache_entry *slot = cache_slot(layout, key);
+    seg_cache_entry *slot = cache_slot(cache, key);
     if (!slot->key)
-        ++layout->cache_count;
+        ++cache->count;
     slot->key = key;
     slot->goals = *goals;
     return PZ_OK;
+}
+
+pz_segment_cache *pz_segment_cache_create(void)
+{
+    return calloc(1, sizeof(pz_segment_cache));
+}
+
+void pz_segment_cache_free(pz_segment_cache **cache)
+{
+    if (!cache || !*cache)
+        return;
+    free((*cache)->entries);
+    free(*cache);
+    *cache = NULL;
 }
 
 /* One evaluation; a failed flattening (not out of memory) counts as a panel that is not injective. */
@@ -296,9 +310,11 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
         if ((want && !want[p]) || layout->panel_evaluated[p])
             continue;
         keys[p] = panel_key(layout, p);
-        seg_cache_entry *slot = layout->cache_capacity ? cache_slot(layout, keys[p]) : NULL;
+        seg_cache_entry *slot = layout->cache->capacity ? cache_slot(layout->cache, keys[p]) : NULL;
         if (slot && slot->key) {
             layout->panel_goals[p] = slot->goals;
+            if (panel_vetoed(layout, p))
+                layout->panel_goals[p].failures |= PZ_GOAL_VETOED;
             layout->panel_evaluated[p] = 1;
         } else {
             miss[misses++] = p;
@@ -324,9 +340,10 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
         if (statuses[i])
             status = nomem(ctx);
         else {
+            /* Stored as evaluated: the vetoes may change from call to call, the evaluation does not. */
+            status = cache_store(layout->cache, keys[miss[i]], layout->panel_goals + miss[i], ctx);
             if (panel_vetoed(layout, miss[i]))
                 layout->panel_goals[miss[i]].failures |= PZ_GOAL_VETOED;
-            status = cache_store(layout, keys[miss[i]], layout->panel_goals + miss[i], ctx);
         }
         layout->panel_evaluated[miss[i]] = 1;
     }
@@ -1029,7 +1046,7 @@ static void layout_free(seg_layout *layout)
     free(layout->panel_faces);
     free(layout->panel_goals);
     free(layout->panel_evaluated);
-    free(layout->cache);
+    free(layout->own_cache.entries);
 }
 
 static pz_status check_options(const pz_segment_options *options, pz_ctx *ctx)
@@ -1051,6 +1068,7 @@ static pz_status layout_init(seg_layout *layout, const pz_mesh *mesh, const pz_t
     layout->topology = topology;
     layout->field = field;
     layout->options = options;
+    layout->cache = options->cache ? options->cache : &layout->own_cache;
     layout->goals.max_corners = options->max_corners > 0 ? options->max_corners : DEFAULT_MAX_CORNERS;
     layout->goals.max_strain = options->max_strain;
     double g = sqrt(options->grain[0] * options->grain[0] + options->grain[1] * options->grain[1] +

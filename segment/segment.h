@@ -136,6 +136,9 @@ void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *optio
 /* The layout                                                                */
 /* ------------------------------------------------------------------------ */
 
+/** Evaluations shared by several pz_segment calls (pz_segment_cache_create, below). */
+typedef struct pz_segment_cache pz_segment_cache;
+
 typedef struct pz_segment_options {
     int32_t max_corners;         /* C; 0 = 8 */
     double max_strain;           /* S (>= 0; pz_segment_options_default sets 0.05) */
@@ -153,6 +156,9 @@ typedef struct pz_segment_options {
      * layout splits it (or does not merge into it) this time. docs/run.md, "The final verdict". */
     const uint64_t *vetoed;
     int32_t vetoed_count;
+    /* Evaluations shared with earlier calls on the same mesh, goals and grain (may be NULL: a private
+     * cache). The caller keeps it alive during the call. */
+    pz_segment_cache *cache;
     /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
      * each insertion, removal and dart with the current panel count and the worst strain among the
      * current panels that have been flattened (0 when none has). */
@@ -161,6 +167,17 @@ typedef struct pz_segment_options {
 } pz_segment_options;
 
 void pz_segment_options_default(pz_segment_options *options);
+
+/**
+ * Panel evaluations kept across pz_segment calls (pz_segment_options.cache): a
+ * panel is judged by its faces and the neighbours across its outline, so a
+ * second layout of the same mesh with the same goals (panelize run's verdict
+ * rounds) flattens only the panels the first never met. Create with
+ * pz_segment_cache_create (NULL when out of memory), free with
+ * pz_segment_cache_free (accepts NULL). Not thread-safe across calls.
+ */
+pz_segment_cache *pz_segment_cache_create(void);
+void pz_segment_cache_free(pz_segment_cache **cache);
 
 /** The key of a panel's face set for pz_segment_options.vetoed: faces[0..count-1] in increasing order. */
 uint64_t pz_segment_face_set_key(const int32_t *faces, int32_t count);
