@@ -441,10 +441,28 @@ static void test_decimation(void)
     pz_mesh_free(&clean);
 }
 
+/* 1 when the centroid of face f (in positions) has x > 0: the bodice's right half. */
+static int32_t right_side(const pz_mesh *mesh, int32_t f)
+{
+    const int32_t *c = mesh->faces + 3 * (size_t)f;
+    return mesh->positions[3 * (size_t)c[0]] + mesh->positions[3 * (size_t)c[1]] + mesh->positions[3 * (size_t)c[2]] >
+           0.0;
+}
+
+/* Poses and labels (the bodice's halves) follow the remeshing. */
 static void test_poses(void)
 {
     pz_ctx ctx = quiet_context();
     pz_mesh *mesh = bodice(30000, 2, &ctx);
+    mesh->face_labels = malloc((size_t)mesh->face_count * sizeof(int32_t));
+    mesh->label_names = calloc(2, sizeof(char *));
+    REQUIRE(mesh->face_labels && mesh->label_names, "out of memory");
+    mesh->label_count = 2;
+    mesh->label_names[1] = malloc(sizeof "right");
+    REQUIRE(mesh->label_names[1], "out of memory");
+    strcpy(mesh->label_names[1], "right");
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        mesh->face_labels[f] = right_side(mesh, f);
     pz_prepare_options options = {.target_faces = 8000};
     pz_prepare_result *result = NULL;
     REQUIRE_OK(pz_prepare(mesh, &options, &result, &ctx), ctx);
@@ -459,6 +477,13 @@ static void test_poses(void)
     }
     CHECK(result->report.pose_hausdorff_max < result->report.hausdorff_bound, "report: poses %.3f, bound %.3f",
           result->report.pose_hausdorff_max, result->report.hausdorff_bound);
+    REQUIRE(out->face_labels && out->label_count == 2 && out->label_names, "labels lost");
+    CHECK(out->label_names[0] == NULL && strcmp(out->label_names[1], "right") == 0, "label names changed");
+    int32_t wrong = 0;
+    for (int32_t f = 0; f < out->face_count; ++f)
+        wrong += out->face_labels[f] != right_side(out, f);
+    CHECK(wrong < out->face_count / 100, "%d of %d faces took the other half's label", (int)wrong,
+          (int)out->face_count);
     pz_prepare_result_free(&result);
     pz_mesh_free(&mesh);
 }
