@@ -1582,10 +1582,10 @@ static pz_status correct_face_count(const pz_cgal_surface *source, double expect
             over_edge = *edge, over_miss = miss;
         else
             under_edge = *edge, under_miss = miss;
-        if (over_edge > 0.0 && under_edge > 0.0) /* log miss linear in log edge between the two */
+        if (over_edge > 0.0 && under_edge > 0.0 && under_miss > 0.0) /* log miss linear in log edge between them */
             *edge = exp(log(over_edge) + log(under_edge / over_edge) * log(over_miss) / log(over_miss / under_miss));
         else
-            *edge *= sqrt(miss);
+            *edge *= sqrt(fmax(miss, 0.25));
         if ((status = pz_cgal_remesh(source, *edge, iterations, &trial, ctx)))
             break;
         ++*passes;
