@@ -3,16 +3,16 @@
  * much memory: a generated bodice of ~1,000,000 faces (a scan's density) with
  * its seams unwelded (every vertex on the left/right split duplicated, so the
  * weld step has real work) prepared to 20,000 faces: weld, repair,
- * fragments, edge-collapse decimation, isotropic remeshing, Hausdorff.
+ * fragments, decimation (thinning), isotropic remeshing, Hausdorff.
  *
  *   bench_prepare [FACES [TARGET]]      (default 1000000 20000)
  *
  * One machine-readable line with the total, each step's seconds and the
  * peak resident size (VmHWM) over the size before preparing:
  *
- *   bench_prepare faces=1000000 target=20000 out_faces=20050 total_s=6.1 cpu_s=6.0 weld_s=0.3 repair_s=1.2
- *     fragments_s=0.1 decimate_s=2.5 remesh_s=0.4 poses_s=0.0 hausdorff_s=1.4 hausdorff_mm=0.4
- *     bound_mm=3.7 peak_mb=900 over_input_mb=650
+ *   bench_prepare faces=999764 target=20000 out_faces=20223 total_s=2.852 cpu_s=2.399 weld_s=0.291
+ *     repair_s=0.160 fragments_s=0.056 decimate_s=0.361 remesh_s=0.444 poses_s=0.000 hausdorff_s=1.501
+ *     ... hausdorff_mm=0.287 bound_mm=3.733 peak_mb=348 over_input_mb=316
  *
  * and a second line with each step's peak resident size (MB, sampled every
  * millisecond) and the load average; stderr gets what each step did.

@@ -495,11 +495,12 @@ typedef enum pz_prepare_keep {
 typedef struct pz_prepare_options {
     double weld_distance;      /* weld vertices closer than this; 0 = 0.01 mm; < 0 = no welding */
     double target_edge;        /* remeshing edge length; 0 = from target_faces */
-    int32_t target_faces;      /* faces wanted when target_edge is 0; 0 = 20000 */
+    int32_t target_faces;      /* faces wanted when target_edge is 0; 0 = 20000 (automatic: the most
+                                  faces kept as they are, and the count above them; 0 = 10000) */
     pz_prepare_keep keep;
     double fragment_fraction;  /* 0 = 0.01 (1% of the total area) */
     int iterations;            /* remeshing rounds; 0 = 5 */
-    int automatic;             /* 1: run decimation and remeshing only when the mesh needs them */
+    int automatic;             /* 1: decimate and remesh only when the mesh needs it (pz_prepare_auto) */
     int no_remesh;             /* 1: never decimate or remesh (weld and repair only) */
     const char *name;          /* the input's name for messages; NULL = "mesh" */
 } pz_prepare_options;
@@ -556,17 +557,27 @@ typedef struct pz_prepare_result {
  * Hausdorff distance to the repaired input. `mesh` (in mm) is not changed.
  * Errors: PZ_ERR_INVALID_MESH when nothing is left after repair or a
  * component is not orientable; PZ_ERR_USAGE for a target edge too long for
- * the garment. Notes each step through pz_note.
+ * the garment. Notes each step through pz_note. On success *out is a new
+ * result the caller owns (pz_prepare_result_free); on failure *out is NULL.
  */
 pz_status pz_prepare(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out, pz_ctx *ctx);
 
-/** pz_prepare with options->automatic set: what `panelize run --prepare auto` calls. */
+/**
+ * pz_prepare with options->automatic set: what `panelize run --prepare auto`
+ * calls. Weld, repair and fragments always run; then a mesh over 10000 faces
+ * (options->target_faces when set) is remeshed to that count, one with under
+ * 95% of its faces free of angles under 20 degrees is remeshed at its own
+ * face count, and that remesh is undone (the repaired input kept) when it
+ * moves the shape beyond the Hausdorff bound. The remesh step's detail says
+ * why it ran, or why not (docs/prepare.md). Ownership as pz_prepare.
+ */
 pz_status pz_prepare_auto(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out,
                           pz_ctx *ctx);
 
+/** Frees the result, its mesh and seams, and sets *result to NULL (NULL or *result NULL: nothing). */
 void pz_prepare_result_free(pz_prepare_result **result);
 
-/** Writes the seams as a sketch file {"curves": [[[x,y,z], ...], ...]} (mm), atomically. */
+/** Writes the seams as a sketch file {"curves": [[[x,y,z], ...], ...]} (mm), atomically; result stays the caller's. */
 pz_status pz_prepare_write_seams(const pz_prepare_result *result, const char *path, pz_ctx *ctx);
 
 /* ------------------------------------------------------------------------ */

@@ -11,9 +11,15 @@
  *  - a dense bodice (unwelded, or with vertex noise) is decimated (thinning)
  *    and remeshed to 4000 faces: valid, one piece, well shaped, within the
  *    bound of the clean bodice, seams kept;
+ *  - CGAL's edge collapse (the fallback of thinning) keeps the outline and
+ *    the seams constrained and lands near the faces asked for;
  *  - poses stay in correspondence: every pose has the output's vertices, and
  *    each lies within the bound of its own input pose;
- *  - automatic mode leaves a clean mesh alone and says why;
+ *  - automatic mode leaves a clean mesh alone, brings a fine one to 10000
+ *    faces, remeshes a badly shaped one at its own density, keeps a coarse
+ *    badly shaped one whose remesh would leave the bound, and says why;
+ *  - --keep all keeps every component (20 small parts), --keep largest drops
+ *    them;
  *  - bad input: nothing left after repair, a target edge longer than the
  *    garment, an empty mesh: an error, *out NULL;
  *  - every shared garment (../shared/data/garments) passes through unchanged
@@ -27,6 +33,15 @@
 
 #include <math.h>
 #include <stdint.h>
+
+/* A context whose notes are silent (the tests print their own lines). */
+static pz_ctx quiet_context(void)
+{
+    pz_ctx ctx;
+    pz_ctx_init(&ctx);
+    ctx.quiet = 1;
+    return ctx;
+}
 
 /* Largest distance from mesh `a`'s vertices (in positions pa) to mesh `b`'s surface (in pb). */
 static double one_sided(const pz_mesh *a, const double *pa, const pz_mesh *b, const double *pb)
@@ -122,6 +137,26 @@ static void add_face(pz_mesh *mesh, int32_t a, int32_t b, int32_t c)
     f[0] = a, f[1] = b, f[2] = c;
 }
 
+/*
+ * Splits every step-th face of [first, last) in three around a point 2% off
+ * its first edge: (a b m) is a sliver (angles of ~2, ~2 and ~176 degrees).
+ * The mesh needs room for the new vertices and faces (grow).
+ */
+static void add_slivers(pz_mesh *mesh, int32_t first, int32_t last, int32_t step)
+{
+    for (int32_t f = first; f < last; f += step) {
+        int32_t *corner = mesh->faces + 3 * (size_t)f;
+        int32_t a = corner[0], b = corner[1], c = corner[2];
+        const double *pa = mesh->positions + 3 * (size_t)a, *pb = mesh->positions + 3 * (size_t)b,
+                     *pc = mesh->positions + 3 * (size_t)c;
+        int32_t m = add_vertex(mesh, 0.49 * pa[0] + 0.49 * pb[0] + 0.02 * pc[0],
+                               0.49 * pa[1] + 0.49 * pb[1] + 0.02 * pc[1], 0.49 * pa[2] + 0.49 * pb[2] + 0.02 * pc[2]);
+        corner[2] = m;
+        add_face(mesh, b, c, m);
+        add_face(mesh, c, a, m);
+    }
+}
+
 /* A deterministic pseudo-random number in [-1, 1]. */
 static double noise(uint32_t *state)
 {
@@ -158,25 +193,13 @@ static pz_mesh *corrupted_bodice(const pz_mesh *clean, int32_t *duplicates, pz_c
         add_face(mesh, a, b, d);
         add_face(mesh, a, d, c);
     }
-    for (int32_t f = f0 / 2; f < f0 / 2 + 300; ++f) { /* a slice of slivers: a point just off edge ab */
-        int32_t *corner = mesh->faces + 3 * (size_t)f;
-        int32_t a = corner[0], b = corner[1], c = corner[2];
-        const double *pa = mesh->positions + 3 * (size_t)a, *pb = mesh->positions + 3 * (size_t)b,
-                     *pc = mesh->positions + 3 * (size_t)c;
-        int32_t m = add_vertex(mesh, 0.49 * pa[0] + 0.49 * pb[0] + 0.02 * pc[0],
-                               0.49 * pa[1] + 0.49 * pb[1] + 0.02 * pc[1], 0.49 * pa[2] + 0.49 * pb[2] + 0.02 * pc[2]);
-        corner[2] = m; /* (a b m) is the sliver */
-        add_face(mesh, b, c, m);
-        add_face(mesh, c, a, m);
-    }
+    add_slivers(mesh, f0 / 2, f0 / 2 + 300, 1); /* a slice of slivers */
     return mesh;
 }
 
 static void test_corrupted_bodice(void)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    pz_ctx ctx = quiet_context();
     pz_mesh *clean = bodice(20000, 0, &ctx);
     int32_t duplicates = 0;
     pz_mesh *mesh = corrupted_bodice(clean, &duplicates, &ctx);
@@ -267,9 +290,7 @@ static void check_seams(const pz_prepare_result *result, const double centre[3],
 
 static void test_unwelded_panels(void)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    pz_ctx ctx = quiet_context();
     pz_mesh *clean = bodice(20000, 0, &ctx);
     double centre[3], axis[3];
     pz_mesh *panels = unwelded_bodice(clean, centre, axis);
@@ -295,6 +316,82 @@ static void test_unwelded_panels(void)
     pz_mesh_free(&clean);
 }
 
+/* Edges with one face: sorted vertex pairs, counted where a pair is alone. */
+static int pair_order(const void *pa, const void *pb)
+{
+    const int64_t *a = pa, *b = pb;
+    return (*a > *b) - (*a < *b);
+}
+
+static int32_t outline_edges(const int32_t *faces, int32_t face_count)
+{
+    int64_t *keys = malloc(3 * (size_t)face_count * sizeof(int64_t));
+    REQUIRE(keys, "out of memory");
+    for (int32_t h = 0; h < 3 * face_count; ++h) {
+        int64_t a = faces[h], b = faces[h % 3 == 2 ? h - 2 : h + 1];
+        keys[h] = a < b ? a << 32 | b : b << 32 | a;
+    }
+    qsort(keys, 3 * (size_t)face_count, sizeof(int64_t), pair_order);
+    int32_t alone = 0;
+    for (int32_t i = 0; i < 3 * face_count; ++i)
+        alone += (i == 0 || keys[i] != keys[i - 1]) && (i + 1 == 3 * face_count || keys[i] != keys[i + 1]);
+    free(keys);
+    return alone;
+}
+
+/*
+ * CGAL's edge collapse (pz_cgal_decimate, the fallback when thinning
+ * stalls) on the welded 4-panel bodice with its seams constrained: about
+ * the faces asked for, still a valid surface, and the outline and the
+ * seams keep every edge and vertex where they were.
+ */
+static void test_cgal_decimate(void)
+{
+    pz_ctx ctx = quiet_context();
+    pz_mesh *clean = bodice(20000, 0, &ctx);
+    double centre[3], axis[3];
+    pz_mesh *panels = unwelded_bodice(clean, centre, axis);
+    pz_prepare_options options = {.no_remesh = 1};
+    pz_prepare_result *welded = NULL;
+    REQUIRE_OK(pz_prepare(panels, &options, &welded, &ctx), ctx);
+    const pz_mesh *mesh = welded->mesh;
+    int32_t seam_edges = welded->seam_offsets[welded->seam_count] - welded->seam_count;
+    int32_t *pairs = malloc(2 * (size_t)seam_edges * sizeof(int32_t)), count = 0;
+    REQUIRE(pairs, "out of memory");
+    for (int32_t s = 0; s < welded->seam_count; ++s)
+        for (int32_t i = welded->seam_offsets[s]; i + 1 < welded->seam_offsets[s + 1]; ++i, ++count) {
+            pairs[2 * count] = welded->seam_vertices[i];
+            pairs[2 * count + 1] = welded->seam_vertices[i + 1];
+        }
+    pz_cgal_surface in = {mesh->vertex_count, mesh->face_count, count, mesh->positions, mesh->faces, pairs, 0, NULL};
+    pz_cgal_surface out = {0};
+    REQUIRE_OK(pz_cgal_decimate(&in, 4000, &out, &ctx), ctx);
+    CHECK(abs(out.face_count - 4000) < 400, "%d faces, 4000 asked for", (int)out.face_count);
+    CHECK(out.edge_count == count, "%d seam edges out of %d", (int)out.edge_count, (int)count);
+    CHECK(outline_edges(out.faces, out.face_count) == outline_edges(mesh->faces, mesh->face_count),
+          "outline: %d edges, %d before", (int)outline_edges(out.faces, out.face_count),
+          (int)outline_edges(mesh->faces, mesh->face_count));
+    int32_t moved = 0;
+    for (int32_t e = 0; e < 2 * out.edge_count; ++e) { /* every seam vertex is one of the input's seam vertices */
+        const double *p = out.positions + 3 * (size_t)out.edges[e];
+        int found = 0;
+        for (int32_t i = 0; i < 2 * count && !found; ++i) {
+            const double *q = mesh->positions + 3 * (size_t)pairs[i];
+            found = p[0] == q[0] && p[1] == q[1] && p[2] == q[2];
+        }
+        moved += !found;
+    }
+    CHECK(moved == 0, "%d seam vertex ends moved", (int)moved);
+    pz_mesh *decimated = test_mesh_from(out.vertex_count, out.positions, out.face_count, out.faces, &ctx);
+    CHECK(is_valid(decimated) && component_count(decimated) == 1, "the decimated bodice is not one valid surface");
+    pz_mesh_free(&decimated);
+    pz_cgal_surface_clear(&out);
+    free(pairs);
+    pz_prepare_result_free(&welded);
+    pz_mesh_free(&panels);
+    pz_mesh_free(&clean);
+}
+
 /*
  * Decimation: a dense bodice split into 4 unwelded panels, prepared to 4000
  * faces, goes through thinning (and CGAL's edge collapse when thinning
@@ -304,9 +401,7 @@ static void test_unwelded_panels(void)
  */
 static void test_decimation(void)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    pz_ctx ctx = quiet_context();
     pz_mesh *clean = bodice(60000, 0, &ctx);
     double centre[3], axis[3], bound = 0.005 * diagonal(clean);
     pz_mesh *panels = unwelded_bodice(clean, centre, axis);
@@ -346,12 +441,28 @@ static void test_decimation(void)
     pz_mesh_free(&clean);
 }
 
+/* 1 when the centroid of face f (in positions) has x > 0: the bodice's right half. */
+static int32_t right_side(const pz_mesh *mesh, int32_t f)
+{
+    const int32_t *c = mesh->faces + 3 * (size_t)f;
+    return mesh->positions[3 * (size_t)c[0]] + mesh->positions[3 * (size_t)c[1]] + mesh->positions[3 * (size_t)c[2]] >
+           0.0;
+}
+
+/* Poses and labels (the bodice's halves) follow the remeshing. */
 static void test_poses(void)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    pz_ctx ctx = quiet_context();
     pz_mesh *mesh = bodice(30000, 2, &ctx);
+    mesh->face_labels = malloc((size_t)mesh->face_count * sizeof(int32_t));
+    mesh->label_names = calloc(2, sizeof(char *));
+    REQUIRE(mesh->face_labels && mesh->label_names, "out of memory");
+    mesh->label_count = 2;
+    mesh->label_names[1] = malloc(sizeof "right");
+    REQUIRE(mesh->label_names[1], "out of memory");
+    strcpy(mesh->label_names[1], "right");
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        mesh->face_labels[f] = right_side(mesh, f);
     pz_prepare_options options = {.target_faces = 8000};
     pz_prepare_result *result = NULL;
     REQUIRE_OK(pz_prepare(mesh, &options, &result, &ctx), ctx);
@@ -366,32 +477,127 @@ static void test_poses(void)
     }
     CHECK(result->report.pose_hausdorff_max < result->report.hausdorff_bound, "report: poses %.3f, bound %.3f",
           result->report.pose_hausdorff_max, result->report.hausdorff_bound);
+    REQUIRE(out->face_labels && out->label_count == 2 && out->label_names, "labels lost");
+    CHECK(out->label_names[0] == NULL && strcmp(out->label_names[1], "right") == 0, "label names changed");
+    int32_t wrong = 0;
+    for (int32_t f = 0; f < out->face_count; ++f)
+        wrong += out->face_labels[f] != right_side(out, f);
+    CHECK(wrong < out->face_count / 100, "%d of %d faces took the other half's label", (int)wrong,
+          (int)out->face_count);
     pz_prepare_result_free(&result);
     pz_mesh_free(&mesh);
 }
 
+/* The bodice of `faces` faces with every step-th face split around a sliver. */
+static pz_mesh *sliver_bodice(int32_t faces, int32_t step, pz_ctx *ctx)
+{
+    pz_mesh *mesh = bodice(faces, 0, ctx);
+    int32_t count = mesh->face_count;
+    grow(mesh, count / step + 1, 2 * (count / step + 1));
+    add_slivers(mesh, 0, count, step);
+    return mesh;
+}
+
+static const pz_prepare_step *step_of(const pz_prepare_result *result, pz_prepare_step_id id)
+{
+    return &result->report.steps[id];
+}
+
+/*
+ * Automatic mode (`run --prepare auto`): a clean, small mesh is left alone;
+ * one over 10000 faces is remeshed to about 10000; a badly shaped one is
+ * remeshed at its own face count, within the bound; a coarse badly shaped
+ * one, whose remesh would move it beyond the bound, is kept as it is. Each
+ * time the remesh step says why.
+ */
 static void test_automatic(void)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    pz_ctx ctx = quiet_context();
     pz_mesh *mesh = bodice(5000, 0, &ctx);
     pz_prepare_result *result = NULL;
     REQUIRE_OK(pz_prepare_auto(mesh, NULL, &result, &ctx), ctx);
-    CHECK(!result->report.steps[PZ_PREPARE_REMESH].ran, "remeshed a clean small mesh");
-    CHECK(strstr(result->report.steps[PZ_PREPARE_REMESH].detail, "not needed") != NULL, "remesh detail '%s'",
-          result->report.steps[PZ_PREPARE_REMESH].detail);
+    CHECK(!step_of(result, PZ_PREPARE_REMESH)->ran, "remeshed a clean small mesh");
+    CHECK(strstr(step_of(result, PZ_PREPARE_REMESH)->detail, "not needed") != NULL, "remesh detail '%s'",
+          step_of(result, PZ_PREPARE_REMESH)->detail);
     CHECK(result->mesh->face_count == mesh->face_count, "faces changed: %d -> %d", (int)mesh->face_count,
           (int)result->mesh->face_count);
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+
+    mesh = bodice(16000, 0, &ctx); /* too fine */
+    REQUIRE_OK(pz_prepare_auto(mesh, NULL, &result, &ctx), ctx);
+    CHECK(step_of(result, PZ_PREPARE_REMESH)->ran && strstr(step_of(result, PZ_PREPARE_REMESH)->detail, "more than"),
+          "16000 faces: remesh '%s'", step_of(result, PZ_PREPARE_REMESH)->detail);
+    CHECK(abs(result->mesh->face_count - 10000) < 1000, "16000 faces: %d out, about 10000 wanted",
+          (int)result->mesh->face_count);
+    CHECK(result->report.within_bound, "16000 faces: %.3f mm, bound %.3f", result->report.hausdorff,
+          result->report.hausdorff_bound);
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+
+    mesh = sliver_bodice(4000, 10, &ctx); /* 10% of the faces split around a sliver: 91% well shaped */
+    REQUIRE_OK(pz_prepare_auto(mesh, NULL, &result, &ctx), ctx);
+    CHECK(step_of(result, PZ_PREPARE_REMESH)->ran && strstr(step_of(result, PZ_PREPARE_REMESH)->detail, "angle"),
+          "slivers: remesh '%s'", step_of(result, PZ_PREPARE_REMESH)->detail);
+    CHECK(abs(result->mesh->face_count - mesh->face_count) < mesh->face_count / 10,
+          "slivers: %d faces out of %d: the density should stay", (int)result->mesh->face_count,
+          (int)mesh->face_count);
+    CHECK(well_shaped(result->mesh) > 0.99, "slivers: %.3f well shaped", well_shaped(result->mesh));
+    CHECK(result->report.within_bound, "slivers: %.3f mm", result->report.hausdorff);
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+
+    mesh = sliver_bodice(400, 3, &ctx); /* coarse: remeshing at 670 faces cuts across its facets */
+    REQUIRE_OK(pz_prepare_auto(mesh, NULL, &result, &ctx), ctx);
+    const char *detail = step_of(result, PZ_PREPARE_REMESH)->detail;
+    CHECK(!step_of(result, PZ_PREPARE_REMESH)->ran && strstr(detail, "undone") && strstr(detail, "bound"),
+          "coarse slivers: remesh '%s'", detail);
+    CHECK(result->mesh->face_count == mesh->face_count && result->report.hausdorff == 0.0,
+          "coarse slivers: %d faces out of %d, %.3f mm", (int)result->mesh->face_count, (int)mesh->face_count,
+          result->report.hausdorff);
+    CHECK(is_valid(result->mesh), "coarse slivers: invalid output");
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+}
+
+/* --keep all: the fragments stay as separate parts, with or without remeshing. */
+static void test_keep_all(void)
+{
+    pz_ctx ctx = quiet_context();
+    pz_mesh *mesh = bodice(2000, 0, &ctx);
+    grow(mesh, 80, 40);
+    for (int i = 0; i < 20; ++i) { /* 20 parts of 20 x 20 mm, each 0.08% of the area */
+        double x = 60.0 * i, y = 900.0, z = 400.0;
+        int32_t a = add_vertex(mesh, x, y, z), b = add_vertex(mesh, x + 20, y, z), c = add_vertex(mesh, x, y + 20, z),
+                d = add_vertex(mesh, x + 20, y + 20, z);
+        add_face(mesh, a, b, d);
+        add_face(mesh, a, d, c);
+    }
+    for (int remesh = 0; remesh < 2; ++remesh) {
+        pz_prepare_options options = {.keep = PZ_PREPARE_KEEP_ALL, .no_remesh = !remesh, .target_faces = 3000};
+        pz_prepare_result *result = NULL;
+        REQUIRE_OK(pz_prepare(mesh, &options, &result, &ctx), ctx);
+        CHECK(result->report.components == 21 && result->report.dropped_components == 0,
+              "remesh %d: %d components, %d dropped", remesh, (int)result->report.components,
+              (int)result->report.dropped_components);
+        CHECK(component_count(result->mesh) == 21, "remesh %d: %d components out", remesh,
+              (int)component_count(result->mesh));
+        CHECK(is_valid(result->mesh), "remesh %d: invalid output", remesh);
+        pz_prepare_result_free(&result);
+    }
+    pz_prepare_options largest = {.no_remesh = 1};
+    pz_prepare_result *result = NULL;
+    REQUIRE_OK(pz_prepare(mesh, &largest, &result, &ctx), ctx);
+    CHECK(component_count(result->mesh) == 1 && result->report.dropped_components == 20,
+          "--keep largest: %d components out, %d dropped", (int)component_count(result->mesh),
+          (int)result->report.dropped_components);
     pz_prepare_result_free(&result);
     pz_mesh_free(&mesh);
 }
 
 static void test_bad_input(void)
 {
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    pz_ctx ctx = quiet_context();
     pz_prepare_result *result = (pz_prepare_result *)&ctx; /* must be reset to NULL */
     /* nothing left: every face degenerate (collinear) */
     double line[] = {0, 0, 0, 1, 0, 0, 2, 0, 0, 3, 0, 0};
@@ -427,9 +633,7 @@ static void test_shared_garments(void)
                            "parafashion-dress.ply", "parafashion-leggings.ply", "parafashion-shirt.obj",
                            "parafashion-wetsuit.obj", "shirtfront-panel.obj"};
     for (size_t i = 0; i < sizeof files / sizeof files[0]; ++i) {
-        pz_ctx ctx;
-        pz_ctx_init(&ctx);
-        ctx.quiet = 1;
+        pz_ctx ctx = quiet_context();
         char path[4096];
         snprintf(path, sizeof path, "%s/garments/%s", dir, files[i]);
         pz_mesh *mesh = NULL;
@@ -461,9 +665,7 @@ static void test_shared_poses(void)
         printf("shared poses: skipped (no ../shared/data)\n");
         return;
     }
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
+    pz_ctx ctx = quiet_context();
     char path[4096];
     pz_mesh *mesh = NULL, *pose = NULL;
     snprintf(path, sizeof path, "%s/multipose/jumpsuit/front1.obj", dir);
@@ -498,8 +700,10 @@ int main(void)
     test_corrupted_bodice();
     test_unwelded_panels();
     test_decimation();
+    test_cgal_decimate();
     test_poses();
     test_automatic();
+    test_keep_all();
     test_bad_input();
     test_shared_garments();
     test_shared_poses();
