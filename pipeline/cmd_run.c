@@ -72,6 +72,12 @@ const char pz_cli_run_usage[] =
 
 #define DEFAULT_MAX_CORNERS 8
 #define DEFAULT_MAX_STRAIN 0.05
+/* The final verdict (accept_pattern): layouts made again at most this many times, each round after the
+ * first asking the segmentation's evaluations for VERDICT_MARGIN_STEP more strain margin (at most
+ * VERDICT_MARGIN_MAX). */
+#define MAX_VERDICT_ROUNDS 6
+#define VERDICT_MARGIN_STEP 0.1
+#define VERDICT_MARGIN_MAX 0.5
 
 typedef struct run_state {
     const pz_cli_args *args;
@@ -205,8 +211,9 @@ static pz_status prepare_mesh(void *user, pz_mesh **mesh, int *changed, pz_ctx *
     const pz_prepare_report *report = &state->prepared->report;
     int any_change = report->output_faces != report->input_faces || report->output_vertices != report->input_vertices;
     for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i)
-        if (report->steps[i].ran && i != PZ_PREPARE_HAUSDORFF)
-            pz_note(ctx, "run: prepare: %s: %s", report->steps[i].name, report->steps[i].detail);
+        if ((report->steps[i].ran || i == PZ_PREPARE_REMESH) && i != PZ_PREPARE_HAUSDORFF && report->steps[i].detail[0])
+            pz_note(ctx, "run: prepare: %s%s: %s", report->steps[i].name, report->steps[i].ran ? "" : " (not run)",
+                    report->steps[i].detail);
     if (any_change) {
         pz_mesh_free(mesh);
         *mesh = state->prepared->mesh;
@@ -340,6 +347,10 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
         if (!state->segment_cache && !(state->segment_cache = pz_segment_cache_create()))
             status = pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
         options.cache = state->segment_cache;
+        /* The first verdict round only vetoes the rejected panels; from the second on, each round asks
+         * the evaluations for 10 % more strain margin (at most 50 %): they were too optimistic here. */
+        int margin_rounds = state->verdict_rounds > 1 ? state->verdict_rounds - 1 : 0;
+        options.strain_margin = fmin(VERDICT_MARGIN_MAX, VERDICT_MARGIN_STEP * margin_rounds);
         if (state->verdict_rounds > 0)
             pz_note(ctx, "run: segment again (round %d): the joint flattening rejected %s",
                     (int)state->verdict_rounds + 1, state->verdict_reasons);
@@ -385,7 +396,6 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
  * made again, at most MAX_VERDICT_ROUNDS times; then the last pattern stands,
  * marked by judge_goals. Returns 1 to accept the pattern.
  */
-#define MAX_VERDICT_ROUNDS 3
 static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metrics *metrics)
 {
     run_state *state = user;

@@ -50,6 +50,7 @@ typedef struct seg_layout {
     const pz_field *field;
     const pz_segment_options *options;
     pz_goal_options goals;
+    double accept_strain;    /* (1 - options->strain_margin) * goals.max_strain */
     int threads;
     int32_t max_candidates, max_depth;
     pz_trace_graph *graph;

@@ -195,6 +195,17 @@ uint64_t pz_segment_face_set_key(const int32_t *faces, int32_t count)
 }
 
 /* 1 when panel p's face set is one of the caller's vetoed panels (a short list: linear scan). */
+static int panel_vetoed(const seg_layout *layout, int32_t p);
+
+/* What the layout adds to an evaluation (cached as evaluated): the strain margin and the vetoes. */
+static void layout_verdicts(const seg_layout *layout, int32_t p, pz_goal_result *goals)
+{
+    if (goals->max_abs_strain >= 0 && goals->max_abs_strain > layout->accept_strain)
+        goals->failures |= PZ_GOAL_STRAIN;
+    if (panel_vetoed(layout, p))
+        goals->failures |= PZ_GOAL_VETOED;
+}
+
 static int panel_vetoed(const seg_layout *layout, int32_t p)
 {
     if (layout->options->vetoed_count <= 0)
@@ -313,8 +324,7 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
         seg_cache_entry *slot = layout->cache->capacity ? cache_slot(layout->cache, keys[p]) : NULL;
         if (slot && slot->key) {
             layout->panel_goals[p] = slot->goals;
-            if (panel_vetoed(layout, p))
-                layout->panel_goals[p].failures |= PZ_GOAL_VETOED;
+            layout_verdicts(layout, p, &layout->panel_goals[p]);
             layout->panel_evaluated[p] = 1;
         } else {
             miss[misses++] = p;
@@ -342,8 +352,7 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
         else {
             /* Stored as evaluated: the vetoes may change from call to call, the evaluation does not. */
             status = cache_store(layout->cache, keys[miss[i]], layout->panel_goals + miss[i], ctx);
-            if (panel_vetoed(layout, miss[i]))
-                layout->panel_goals[miss[i]].failures |= PZ_GOAL_VETOED;
+            layout_verdicts(layout, miss[i], &layout->panel_goals[miss[i]]);
         }
         layout->panel_evaluated[miss[i]] = 1;
     }
@@ -1051,6 +1060,8 @@ static void layout_free(seg_layout *layout)
 
 static pz_status check_options(const pz_segment_options *options, pz_ctx *ctx)
 {
+    if (!(options->strain_margin >= 0 && options->strain_margin <= 0.9))
+        return pz_error(ctx, PZ_ERR_USAGE, "segment: strain margin %g is not within 0 .. 0.9", options->strain_margin);
     if (!(options->max_strain >= 0) || options->max_corners < 0 || options->max_candidates < 0 ||
         options->max_depth < 0 || options->threads < 0)
         return pz_error(ctx, PZ_ERR_USAGE, "segment: negative strain, corner, candidate, depth or thread option");
@@ -1071,6 +1082,7 @@ static pz_status layout_init(seg_layout *layout, const pz_mesh *mesh, const pz_t
     layout->cache = options->cache ? options->cache : &layout->own_cache;
     layout->goals.max_corners = options->max_corners > 0 ? options->max_corners : DEFAULT_MAX_CORNERS;
     layout->goals.max_strain = options->max_strain;
+    layout->accept_strain = (1 - options->strain_margin) * options->max_strain;
     double g = sqrt(options->grain[0] * options->grain[0] + options->grain[1] * options->grain[1] +
                     options->grain[2] * options->grain[2]);
     for (int k = 0; k < 3; ++k)

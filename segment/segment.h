@@ -159,6 +159,10 @@ typedef struct pz_segment_options {
     /* Evaluations shared with earlier calls on the same mesh, goals and grain (may be NULL: a private
      * cache). The caller keeps it alive during the call. */
     pz_segment_cache *cache;
+    /* 0 .. 0.9: a panel passes only when its evaluated strain is at most (1 - strain_margin) S (its
+     * flattening still aims at S). 0 by default; panelize run raises it in its verdict rounds, where
+     * the joint flattening showed the evaluations too optimistic for this garment. */
+    double strain_margin;
     /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
      * each insertion, removal and dart with the current panel count and the worst strain among the
      * current panels that have been flattened (0 when none has). */
