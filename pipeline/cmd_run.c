@@ -210,10 +210,13 @@ static pz_status prepare_mesh(void *user, pz_mesh **mesh, int *changed, pz_ctx *
         return status;
     const pz_prepare_report *report = &state->prepared->report;
     int any_change = report->output_faces != report->input_faces || report->output_vertices != report->input_vertices;
-    for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i)
-        if ((report->steps[i].ran || i == PZ_PREPARE_REMESH) && i != PZ_PREPARE_HAUSDORFF && report->steps[i].detail[0])
-            pz_note(ctx, "run: prepare: %s%s: %s", report->steps[i].name, report->steps[i].ran ? "" : " (not run)",
-                    report->steps[i].detail);
+    for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i) {
+        const pz_prepare_step *step = &report->steps[i];
+        /* A remesh that was tried and undone says why; one that was not needed stays quiet. */
+        int tried = i == PZ_PREPARE_REMESH && strstr(step->detail, "undone") != NULL;
+        if ((step->ran || tried) && i != PZ_PREPARE_HAUSDORFF)
+            pz_note(ctx, "run: prepare: %s%s: %s", step->name, step->ran ? "" : " (not kept)", step->detail);
+    }
     if (any_change) {
         pz_mesh_free(mesh);
         *mesh = state->prepared->mesh;
