@@ -19,6 +19,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "../tests/export/fixture_export_b.h"
+#include "../tests/export/export_fixtures.h"
 
 #include "bench_util.h"
 
@@ -119,9 +120,42 @@ static void bench_tshirt(const char *data)
     pz_mesh_free(&mesh);
 }
 
+/* The pattern a `panelize run` or `flatten` wrote (its garment.obj): pieces with the defaults, their marker. */
+static void bench_pattern_obj(const char *path)
+{
+    fixture f;
+    if (!fixture_from_pattern_obj(&f, path))
+        return;
+    pz_export_options options;
+    pz_export_options_default(&options);
+    if (getenv("PZ_GAP"))
+        options.gap_mm = atof(getenv("PZ_GAP"));
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+    pz_marker *marker = NULL;
+    double start = pz_seconds();
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    double cpu = pz_seconds() - start;
+    (void)cpu;
+    char name[256];
+    snprintf(name, sizeof name, "%s", path);
+    for (char *c = name; *c; ++c)
+        if (*c == ' ')
+            *c = '_';
+    print_marker(name, pieces, marker);
+    pz_marker_free(&marker);
+    pz_pieces_free(&pieces);
+    fixture_free(&f);
+}
+
 int main(int argc, char **argv)
 {
     ctx.quiet = 1;
+    if (argc > 1 && strstr(argv[1], ".obj")) {
+        for (int i = 1; i < argc; ++i)
+            bench_pattern_obj(argv[i]);
+        return test_finish() == 0 ? 0 : 1;
+    }
     int32_t faces = argc > 1 ? (int32_t)atoi(argv[1]) : 50000;
     bench_bodice(faces, 8, 1);
     bench_bodice(faces, 20, 0);

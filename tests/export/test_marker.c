@@ -125,20 +125,30 @@ static void check_marker(const pz_pieces *pieces, const pz_marker *marker, const
         }
     CHECK(too_close == 0, "%d pairs closer than the %.1f mm gap (closest %.3f)", (int)too_close, options->gap_mm,
           closest);
-    /* Cut-2 pieces: the two copies are mirror images of each other, grain still along y. */
+    /* Cut-2 pieces: the two copies are mirror images of each other (x -> c - x at the same rotation, y -> c - y
+     * when one is turned 180 degrees: the grain stays along y), placed as a pair: side by side, no farther
+     * apart than the gap and a few raster cells, unless the two are too wide for the fabric together. */
     for (int32_t i = 0; i < marker->placement_count; ++i)
         for (int32_t j = 0; j < marker->placement_count; ++j) {
             const pz_marker_placement *first = &marker->placements[i], *second = &marker->placements[j];
             if (first->piece != second->piece || first->copy != 0 || second->copy != 1)
                 continue;
             const pz_piece *piece = &pieces->pieces[first->piece];
-            double sum_x = points[i][0] + points[j][0], diff_y = points[j][1] - points[i][1];
+            int turned = first->rotation_deg != second->rotation_deg, mirror_axis = turned ? 1 : 0;
+            double sum = points[i][mirror_axis] + points[j][mirror_axis];
+            double diff = points[j][1 - mirror_axis] - points[i][1 - mirror_axis];
             double worst = 0.0;
-            for (int32_t k = 0; k < piece->cut_count && first->rotation_deg == second->rotation_deg; ++k)
-                worst = fmax(worst, fmax(fabs(points[i][2 * k] + points[j][2 * k] - sum_x),
-                                         fabs(points[j][2 * k + 1] - points[i][2 * k + 1] - diff_y)));
-            CHECK(first->rotation_deg == second->rotation_deg && worst < 1e-9, "%s: copies not mirror images (%g)",
-                  piece->name, worst);
+            for (int32_t k = 0; k < piece->cut_count; ++k)
+                worst = fmax(worst, fmax(fabs(points[i][2 * k + mirror_axis] + points[j][2 * k + mirror_axis] - sum),
+                                         fabs(points[j][2 * k + 1 - mirror_axis] - points[i][2 * k + 1 - mirror_axis] -
+                                              diff)));
+            CHECK(worst < 1e-9, "%s: copies not mirror images (%g)", piece->name, worst);
+            double width = piece->bbox_max[0] - piece->bbox_min[0];
+            if (2 * width + options->gap_mm <= options->fabric_width_mm) {
+                double apart = polygon_distance(points[i], piece->cut_count, points[j], piece->cut_count);
+                CHECK(apart <= options->gap_mm + 10.0, "%s: the pair's copies are %.1f mm apart, not side by side",
+                      piece->name, apart);
+            }
         }
     for (int32_t i = 0; i < marker->placement_count; ++i)
         free(points[i]);
