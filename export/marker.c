@@ -43,9 +43,11 @@
 /* Grid cells across the fabric: finer wastes less fabric to the raster, coarser is faster. */
 #define CELLS_ACROSS 1000.0
 /* The local search's budget, counted in grid_find's steps (rows and positions tried, about 10-50 ns each):
- * deterministic, unlike a clock. At most SEARCH_MAX_PASSES passes in all. */
+ * deterministic, unlike a clock. At most SEARCH_MAX_PASSES passes in all ... */
 #define SEARCH_WORK 3000000
 #define SEARCH_MAX_PASSES 150
+/* ... and it stops after this many passes in a row that did not shorten the best marker. */
+#define SEARCH_STALL 60
 
 /* ------------------------------------------------------------------ transforms */
 
@@ -65,7 +67,7 @@ void pz_marker_place_points(const pz_piece *piece, const pz_marker_placement *pl
 /* ------------------------------------------------------------------ shapes */
 
 /* Rows of a shape whose longest run a fabric row must hold before any column is tried there. */
-#define PROBES 5
+#define PROBES 8
 
 /* A rasterized unit: per row, runs of set cells; column c covers [c, c + 1) x resolution, local to the shape. */
 typedef struct shape {
@@ -513,16 +515,23 @@ static int grid_find(grid *g, const unit *u, int32_t *x_out, int32_t *y_out)
     const shape *s = &u->shape;
     for (int32_t y = y_lo;; ++y) {
         ++g->work;
-        /* Fabric rows whose longest free run is shorter than the widest run cannot take the shape there:
-         * whole blocks of them are skipped at once, then each probe row is checked. */
-        int32_t widest_at = y + s->widest_row;
-        if (widest_at < g->rows && g->block_longest[widest_at / ROW_BLOCK] <= s->widest) {
-            y = (widest_at / ROW_BLOCK + 1) * ROW_BLOCK - s->widest_row - 1;
+        /* A probe row needs a fabric row with a free run as long as its own: a block of fabric rows none of
+         * which has one moves y past that block at once, a single such row moves y by one. */
+        int32_t skip_to = y, hopeless = 0;
+        for (int k = 0; k < PROBES; ++k) {
+            int32_t at = y + s->probe_row[k];
+            if (at >= g->rows)
+                continue;
+            if (g->block_longest[at / ROW_BLOCK] <= s->probe_width[k]) {
+                int32_t past = (at / ROW_BLOCK + 1) * ROW_BLOCK - s->probe_row[k];
+                skip_to = past > skip_to ? past : skip_to;
+            }
+            hopeless |= g->longest_run[at] <= s->probe_width[k];
+        }
+        if (skip_to > y) {
+            y = skip_to - 1;
             continue;
         }
-        int hopeless = 0;
-        for (int k = 0; k < PROBES && !hopeless; ++k)
-            hopeless = y + s->probe_row[k] < g->rows && g->longest_run[y + s->probe_row[k]] <= s->probe_width[k];
         if (hopeless)
             continue;
         for (int32_t x = x_lo; x <= x_hi;) {
@@ -725,12 +734,15 @@ static pz_status search_try(search *s, const int32_t *order, pass_score *score, 
 }
 
 /* The fixed orders, then a local search from the best of them: a neighbour replaces the current order when it is
- * no worse (so the search walks along plateaus of equal length). */
+ * no worse (so the search walks along plateaus of equal length). The first order always runs; every other pass
+ * only while the work budget lasts, so a marker of many pieces on a long fabric (where one pass costs the most)
+ * gets fewer passes. */
 static pz_status search_run(search *s, pz_ctx *ctx)
 {
     pz_status status = PZ_OK;
     pass_score current = {INFINITY, INFINITY}, score;
-    for (int which = 0; which < kFixedOrders && status == PZ_OK; ++which) {
+    for (int which = 0; which < kFixedOrders && (which == 0 || s->grid.work < SEARCH_WORK) && status == PZ_OK;
+         ++which) {
         fixed_order(s->demands, s->count, which, s->trial_order, s->scratch);
         status = search_try(s, s->trial_order, &score, ctx);
         if (status == PZ_OK && score_better(score, current)) {
@@ -739,10 +751,14 @@ static pz_status search_run(search *s, pz_ctx *ctx)
         }
     }
     uint64_t state = 0x9e3779b97f4a7c15ull;
-    while (s->grid.work < (getenv("PZ_WORK") ? atof(getenv("PZ_WORK")) : SEARCH_WORK) && s->passes < SEARCH_MAX_PASSES && s->count > 1 && status == PZ_OK) {
+    int32_t since_best = 0;
+    while (s->grid.work < SEARCH_WORK && s->passes < SEARCH_MAX_PASSES && since_best < SEARCH_STALL &&
+           s->count > 1 && status == PZ_OK) {
         memcpy(s->trial_order, s->order, (size_t)s->count * sizeof *s->order);
         perturb(s->trial_order, s->count, &state);
+        pass_score best_before = s->best_score;
         status = search_try(s, s->trial_order, &score, ctx);
+        since_best = score_better(s->best_score, best_before) ? 0 : since_best + 1;
         if (status == PZ_OK && !score_better(current, score)) {
             current = score;
             memcpy(s->order, s->trial_order, (size_t)s->count * sizeof *s->order);
@@ -803,7 +819,7 @@ static pz_status build_demands(const raster *raster, const pz_pieces *pieces, de
 static grid grid_make(double width_mm, double gap_mm)
 {
     grid g = {{0, 0, width_mm}, 0, 0, 0, 0, NULL, NULL, NULL, NULL, 0};
-    g.raster.resolution = fmax(fmax(1.0, width_mm / (getenv("PZ_CELLS") ? atof(getenv("PZ_CELLS")) : CELLS_ACROSS)), (width_mm + gap_mm + 8.0) / (MAX_COLUMNS - 32));
+    g.raster.resolution = fmax(fmax(1.0, width_mm / CELLS_ACROSS), (width_mm + gap_mm + 8.0) / (MAX_COLUMNS - 32));
     g.raster.reach = gap_mm / 2.0 + g.raster.resolution * 0.5 * sqrt(2.0) + 1e-9;
     g.margin = (int32_t)ceil(g.raster.reach / g.raster.resolution) + 1;
     g.columns = (int32_t)ceil(width_mm / g.raster.resolution) + 2 * g.margin + 3;
