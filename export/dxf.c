@@ -28,6 +28,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/stream_status.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -311,5 +312,5 @@ pz_status pz_export_write_dxf(FILE *file, const pz_export_inputs *inputs, const 
     group(&d, 0, "ENDSEC");
     group(&d, 0, "EOF");
     free(offsets);
-    return PZ_OK;
+    return pz_export_stream_status(file, 0, name, ctx);
 }

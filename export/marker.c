@@ -34,6 +34,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/stream_status.h"
 #include "export/xml_text.h"
 
 #include <math.h>
@@ -970,5 +971,5 @@ pz_status pz_export_write_marker_svg(FILE *file, const pz_export_inputs *inputs,
             return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
     }
     fputs("</svg>\n", file);
-    return ferror(file) ? pz_error(ctx, PZ_ERR_CREATE, "%s: write error", name) : PZ_OK;
+    return pz_export_stream_status(file, 0, name, ctx);
 }

@@ -33,11 +33,13 @@
  */
 #define _POSIX_C_SOURCE 200809L /* gmtime_r */
 #include "export/export.h"
+#include "export/stream_status.h"
 #include "export/xml_text.h"
 
 #include <cairo-pdf.h>
 #include <cairo.h>
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -293,13 +295,24 @@ static void draw_sheet(cairo_t *cr, const pz_export_inputs *inputs, const sheet 
 
 /* ------------------------------------------------------------------ streams */
 
+/* The PDF's stream: cairo calls write_stream; the first failure's errno is kept for the message. */
+typedef struct pdf_stream {
+    FILE *file;
+    int error;
+} pdf_stream;
+
 static cairo_status_t write_stream(void *closure, const unsigned char *data, unsigned int length)
 {
-    return fwrite(data, 1, length, (FILE *)closure) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
+    pdf_stream *stream = closure;
+    if (fwrite(data, 1, length, stream->file) == length)
+        return CAIRO_STATUS_SUCCESS;
+    if (!stream->error)
+        stream->error = errno ? errno : EIO;
+    return CAIRO_STATUS_WRITE_ERROR;
 }
 
 /* Finishes the surface and turns cairo's and the stream's state into a status. */
-static pz_status finish(cairo_surface_t *surface, cairo_t *cr, FILE *file, const char *name, pz_ctx *ctx)
+static pz_status finish(cairo_surface_t *surface, cairo_t *cr, pdf_stream *stream, const char *name, pz_ctx *ctx)
 {
     cairo_status_t drawing = cr ? cairo_status(cr) : CAIRO_STATUS_SUCCESS;
     if (cr)
@@ -309,7 +322,9 @@ static pz_status finish(cairo_surface_t *surface, cairo_t *cr, FILE *file, const
     cairo_surface_destroy(surface);
     if (drawing == CAIRO_STATUS_NO_MEMORY || status == CAIRO_STATUS_NO_MEMORY)
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
-    if (drawing != CAIRO_STATUS_SUCCESS || status != CAIRO_STATUS_SUCCESS || ferror(file))
+    if (stream->error || ferror(stream->file))
+        return pz_export_stream_status(stream->file, stream->error, name, ctx);
+    if (drawing != CAIRO_STATUS_SUCCESS || status != CAIRO_STATUS_SUCCESS)
         return pz_error(ctx, PZ_ERR_CREATE, "%s: cannot write the PDF (%s)", name,
                         cairo_status_to_string(status != CAIRO_STATUS_SUCCESS ? status : drawing));
     return PZ_OK;
@@ -342,15 +357,16 @@ pz_status pz_export_write_pdf(FILE *file, const pz_export_inputs *inputs, const 
     pz_status status = sheet_build(inputs->pieces, &sheet, ctx);
     if (status != PZ_OK)
         return status;
+    pdf_stream stream = {file, 0};
     cairo_surface_t *surface =
-        cairo_pdf_surface_create_for_stream(write_stream, file, sheet.width * PT_PER_MM, sheet.height * PT_PER_MM);
+        cairo_pdf_surface_create_for_stream(write_stream, &stream, sheet.width * PT_PER_MM, sheet.height * PT_PER_MM);
     set_metadata(surface, inputs->pieces, "pattern, 1:1");
     cairo_t *cr = cairo_create(surface);
     sheet_space(cr, sheet.height);
     draw_sheet(cr, inputs, &sheet, NULL, NULL);
     cairo_show_page(cr);
     free(sheet.items);
-    return finish(surface, cr, file, name, ctx);
+    return finish(surface, cr, &stream, name, ctx);
 }
 
 /* ------------------------------------------------------------------ tiles */
@@ -615,7 +631,8 @@ pz_status pz_export_write_pdf_tiled(FILE *file, const pz_export_inputs *inputs, 
         free(sheet.items);
         return status;
     }
-    cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(write_stream, file, tiling.paper[0] * PT_PER_MM,
+    pdf_stream stream = {file, 0};
+    cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(write_stream, &stream, tiling.paper[0] * PT_PER_MM,
                                                                    tiling.paper[1] * PT_PER_MM);
     set_metadata(surface, inputs->pieces, "tiled pattern");
     cairo_t *cr = cairo_create(surface);
@@ -632,5 +649,5 @@ pz_status pz_export_write_pdf_tiled(FILE *file, const pz_export_inputs *inputs, 
         }
     free(tiling.inked);
     free(sheet.items);
-    return finish(surface, cr, file, name, ctx);
+    return finish(surface, cr, &stream, name, ctx);
 }

@@ -18,6 +18,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/stream_status.h"
 #include "export/xml_text.h"
 
 #include <math.h>
@@ -172,5 +173,5 @@ pz_status pz_export_write_svg(FILE *file, const pz_export_inputs *inputs, const 
             write_piece(&s, &pieces->pieces[p], pieces, &offsets[2 * p]);
     fputs("</svg>\n", file);
     free(offsets);
-    return PZ_OK;
+    return pz_export_stream_status(file, 0, name, ctx);
 }

@@ -16,6 +16,7 @@
 #include "../test_util.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -106,7 +107,30 @@ static inline fixture fixture_generated(pz_shape shape, int32_t faces, int quart
     return f;
 }
 
-/* f->pattern from f->garment's UV islands (use_uv) or two halves. 0 when it cannot be built (printed, f freed). */
+/*
+ * Panel ids from the `g panel_K` groups of a garment.obj that panelize wrote
+ * (the same numbers as its pieces), when every face has such a group;
+ * face_panel is left alone otherwise.
+ */
+static inline void fixture_panels_from_groups(const pz_mesh *mesh, int32_t *face_panel)
+{
+    if (!mesh->face_labels || !mesh->label_names)
+        return;
+    for (int32_t l = 0; l < mesh->label_count; ++l) {
+        int id = -1, consumed = 0;
+        if (!mesh->label_names[l] || sscanf(mesh->label_names[l], "panel_%d%n", &id, &consumed) != 1 ||
+            mesh->label_names[l][consumed] != '\0' || id < 0)
+            return;
+    }
+    for (int32_t t = 0; t < mesh->face_count; ++t) {
+        int id = -1;
+        sscanf(mesh->label_names[mesh->face_labels[t]], "panel_%d", &id);
+        face_panel[t] = id;
+    }
+}
+
+/* f->pattern from f->garment's UV islands (use_uv; numbered by the `g panel_K` groups when it has them) or two
+ * halves. 0 when it cannot be built (printed, f freed). */
 static inline int fixture_pattern_of(fixture *f, const char *path, int use_uv)
 {
     pz_ctx ctx = {0};
@@ -118,6 +142,8 @@ static inline int fixture_pattern_of(fixture *f, const char *path, int use_uv)
         status = pz_pattern_panels_from_uv(f->garment, face_panel, &panel_count, &cuts, &ctx);
     else
         fixture_split(f, 0, face_panel, &panel_count);
+    if (status == PZ_OK && use_uv)
+        fixture_panels_from_groups(f->garment, face_panel);
     if (status == PZ_OK)
         status = pz_pattern_build(f->garment, face_panel, cuts, NULL, path, &f->pattern, &ctx);
     free(face_panel);
