@@ -13,7 +13,8 @@
  *    piece is a block inserted once whose closed layer-1 polyline has our cut
  *    vertex count and perimeter, with the sew line, notches, grain line,
  *    dart lines on their layers. Strict: no TABLES section, 7-bit ASCII only;
- *    normal: non-ASCII text as \U+XXXX.
+ *    normal: non-ASCII text as \U+XXXX; pieces of the same name get distinct
+ *    block names.
  * Readers that are not installed skip their part (printed), which fails the
  * test when CI=true (tests/export/readers.h).
  * The skirt of ../shared/data (darts) is written too when present.
@@ -235,6 +236,32 @@ static void test_bodice(void)
     fixture_free(&f);
 }
 
+/* Pieces with the same name get distinct block names: "_K" (the panel) appended, again if that clashes. */
+static void test_block_names(void)
+{
+    fixture f = fixture_generated(PZ_SHAPE_BODICE, 2000, 1);
+    const char *names[4] = {"front", "front", "front_1", "back"};
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, names, &pieces, &ctx), ctx);
+    pz_export_inputs inputs = {.pattern = f.pattern, .uv = f.uv, .pieces = pieces, .options = &options};
+    char path[512];
+    size_t size = 0;
+    char *dxf = write_file("names.dxf", pz_export_write_dxf, &inputs, path, &size);
+    const char *expected[4] = {"front_0", "front_1_1", "front_1_2", "back"};
+    for (int i = 0; i < 4; ++i) {
+        char block[80], insert[80];
+        snprintf(block, sizeof block, "\nBLOCK\n  8\n0\n  2\n%s\n", expected[i]);
+        snprintf(insert, sizeof insert, "\nINSERT\n  8\n0\n  2\n%s\n", expected[i]);
+        CHECK(count_of(dxf, block) == 1 && count_of(dxf, insert) == 1, "block %s: %d defined, %d inserted", expected[i],
+              count_of(dxf, block), count_of(dxf, insert));
+    }
+    free(dxf);
+    pz_pieces_free(&pieces);
+    fixture_free(&f);
+}
+
 /* The skirt's true UV pattern has darts: dart lines and notches must come through. */
 static void test_skirt(void)
 {
@@ -256,6 +283,7 @@ int main(void)
 {
     test_temp_dir_create("pz_export_svg_dxf");
     test_bodice();
+    test_block_names();
     test_skirt();
     if (!getenv("PZ_KEEP_OUTPUT"))
         test_remove_tree(test_temp_dir);
