@@ -13,7 +13,8 @@
  *                         "Piece Name: ...", "Quantity: N", "Size: ..."
  *               layer 14  sew line (closed POLYLINE)
  *               layer 4   notches: LINEs from the cut line inward, as long
- *                         as the notch is deep
+ *                         as the notch is deep (one per place: the ends of
+ *                         two seams at a corner are one notch)
  *               layer 7   grain line (a LINE along the warp, tail to head)
  *               layer 8   internal lines: dart legs, fold lines, tip marks
  *   ENTITIES  one INSERT per block at its place on the sheet (the layout of
@@ -28,6 +29,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/notches.h"
 #include "export/stream_status.h"
 
 #include <ctype.h>
@@ -285,12 +287,18 @@ static void piece_block(const dxf *d, const pz_pieces *pieces, int32_t p, const 
     group(d, 3, name);
     polyline(d, "1", piece->cut, piece->cut_count, 1);
     polyline(d, "14", piece->sew, piece->sew_count, 1);
+    /* Two seams' ends at one corner are one notch for the cutter (all of them when out of memory for that). */
+    char(*labels)[PZ_NOTCH_LABELS_MAX] = malloc(((size_t)piece->notch_count + 1) * sizeof *labels);
+    int joined = labels && pz_piece_notch_labels(piece, labels);
     for (int32_t i = 0; i < piece->notch_count; ++i) {
         const pz_notch *n = &piece->notches[i];
+        if (joined && !labels[i][0])
+            continue;
         double inner[2] = {n->cut_point[0] - n->depth_mm * n->direction[0],
                            n->cut_point[1] - n->depth_mm * n->direction[1]};
         line(d, "4", n->cut_point, inner);
     }
+    free(labels);
     line(d, "7", piece->grain[0], piece->grain[1]);
     for (int32_t i = 0; i < piece->line_count; ++i)
         polyline(d, "8", piece->lines[i].points, piece->lines[i].point_count, 0);

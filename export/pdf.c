@@ -11,7 +11,8 @@
  * 25.4 pt.
  *
  * Each piece: cut line (solid, 0.5 mm), sew line (dashed, 0.3 mm), notches
- * (cut from the cut line inward by their depth, with their labels), internal
+ * (cut from the cut line inward by their depth, with their labels; notches
+ * at one place drawn once, labels joined: "X5 I1"), internal
  * lines (darts), the grain arrow, and its name, cut count ("Cut 1" / "Cut 2
  * mirrored"), garment, size and extent as text.
  *
@@ -33,6 +34,7 @@
  */
 #define _POSIX_C_SOURCE 200809L /* gmtime_r */
 #include "export/export.h"
+#include "export/notches.h"
 #include "export/stream_status.h"
 #include "export/xml_text.h"
 
@@ -226,17 +228,25 @@ static void draw_piece(cairo_t *cr, const pz_pieces *pieces, const pz_piece *pie
         path_polyline(cr, piece->lines[l].points, piece->lines[l].point_count, offset, 0);
         cairo_stroke(cr);
     }
+    /* Notches at one place (two seams' ends at a corner) once, their labels joined; each on its own when out of
+     * memory for that. */
+    char(*labels)[PZ_NOTCH_LABELS_MAX] = malloc(((size_t)piece->notch_count + 1) * sizeof *labels);
+    int joined = labels && pz_piece_notch_labels(piece, labels);
     for (int32_t n = 0; n < piece->notch_count; ++n) {
         /* A notch is a cut from the cut line inward, depth_mm long (pz_notch). */
         const pz_notch *notch = &piece->notches[n];
+        const char *label = joined ? labels[n] : notch->label;
+        if (joined && !label[0])
+            continue;
         double x = notch->cut_point[0] + offset[0], y = notch->cut_point[1] + offset[1];
         cairo_move_to(cr, x, y);
         cairo_line_to(cr, x - notch->depth_mm * notch->direction[0], y - notch->depth_mm * notch->direction[1]);
         cairo_stroke(cr);
-        if (notch->label[0])
+        if (label[0])
             draw_text(cr, notch->position[0] + offset[0] - 6 * notch->direction[0] - 2,
-                      notch->position[1] + offset[1] - 6 * notch->direction[1] - 1, 3.0, notch->label);
+                      notch->position[1] + offset[1] - 6 * notch->direction[1] - 1, 3.0, label);
     }
+    free(labels);
     double tail[2] = {piece->grain[0][0] + offset[0], piece->grain[0][1] + offset[1]};
     double head[2] = {piece->grain[1][0] + offset[0], piece->grain[1][1] + offset[1]};
     cairo_set_line_width(cr, 0.5);

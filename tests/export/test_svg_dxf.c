@@ -131,10 +131,18 @@ static void check_svg(const pz_export_inputs *inputs, const char *tag)
     int32_t labels = 0, doubled = 0;
     for (int32_t p = 0; p < pieces->piece_count; ++p)
         if (!pieces->pieces[p].mirrored) {
-            labels += pieces->pieces[p].notch_count;
+            labels += distinct_notches(&pieces->pieces[p]);
             doubled += pieces->pieces[p].cut_quantity == 2;
+            /* Every notch's own label is shown (alone, or joined with those at the same place). */
+            for (int32_t i = 0; i < pieces->pieces[p].notch_count; ++i) {
+                char shown[40];
+                snprintf(shown, sizeof shown, "%s<", pieces->pieces[p].notches[i].label);
+                char joined[40];
+                snprintf(joined, sizeof joined, "%s ", pieces->pieces[p].notches[i].label);
+                CHECK(strstr(svg, shown) || strstr(svg, joined), "%s: notch label %s not shown", tag, shown);
+            }
         }
-    CHECK(count_of(svg, "class=\"notch-label\"") == labels, "%s: %d notch labels, %d notches", tag,
+    CHECK(count_of(svg, "class=\"notch-label\"") == labels, "%s: %d notch labels, %d notches at distinct places", tag,
           count_of(svg, "class=\"notch-label\""), (int)labels);
     CHECK(count_of(svg, ">Cut 2 mirrored<") == doubled && count_of(svg, ">Cut 1<") == drawn - doubled,
           "%s: cut counts", tag);
