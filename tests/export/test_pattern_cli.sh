@@ -7,7 +7,9 @@
 #  - --seam-allowance 15 --hem-allowance 25: the DXF's cut line (layer 1) lies
 #    15 or 25 mm outside the sew line (layer 14) at its vertices, read with
 #    ezdxf; --dxf-strict: no TABLES section, 7-bit ASCII, audit() clean;
-#  - --allowances FILE: a bad line is exit 65 naming the file and line, and no
+#  - --notch-spacing 50: about twice the notches of the default 100 mm;
+#  - --allowances FILE: the seam it names gets its allowance (read back from
+#    the DXF); a bad line is exit 65 naming the file and line, and no
 #    pattern file is left behind;
 #  - an output folder that cannot be written: exit 73, one line naming it,
 #    no file left: a read-only folder (a read-only tmpfs in a private mount
@@ -75,6 +77,41 @@ print('ok', len(blocks), 'blocks')
 PY
 else
     echo "ezdxf (/usr/bin/python3): not installed, DXF read-back skipped"
+fi
+
+# --notch-spacing: half the spacing, about twice the notches (layer-4 LINEs of the DXF).
+run flatten skirt.obj -o notch50 --quiet --fabric-width 4000 --notch-spacing 50
+expect_ok "flatten --notch-spacing 50"
+count_notches() { awk 'prev == "LINE" && $0 == "  8" { getline; if ($0 == "4") n++ } { prev = $0 } END { print n + 0 }' "$1"; }
+notches_100=$(count_notches plain/pattern.dxf)
+notches_50=$(count_notches notch50/pattern.dxf)
+check "--notch-spacing 50: $notches_50 notches, $notches_100 at 100 mm" \
+    awk -v a="$notches_50" -v b="$notches_100" 'BEGIN { exit !(b >= 4 && a >= 1.6 * b && a <= 2.4 * b) }'
+
+# --allowances FILE: the skirt's one seam (panel 0 with itself) at 22 mm, the hem at the default 10.
+printf '# panel panel mm\n0 0 22\n' >good.txt
+run flatten skirt.obj -o seam22 --quiet --fabric-width 4000 --allowances good.txt
+expect_ok "flatten --allowances good.txt"
+if /usr/bin/python3 -c 'import ezdxf' 2>/dev/null; then
+    check "ezdxf: the seam at 22 mm, the hem at 10" /usr/bin/python3 - seam22/pattern.dxf <<'PY'
+import math, sys
+import ezdxf
+doc = ezdxf.readfile(sys.argv[1])
+block = [b for b in doc.blocks if not b.name.startswith('*')][0]
+cut = [e for e in block if e.dxftype() == 'POLYLINE' and e.dxf.layer == '1'][0]
+sew = [e for e in block if e.dxftype() == 'POLYLINE' and e.dxf.layer == '14'][0]
+sew = [(v.dxf.location.x, v.dxf.location.y) for v in sew.vertices]
+def distance(p):
+    best = math.inf
+    for i in range(len(sew)):
+        a, b = sew[i], sew[(i + 1) % len(sew)]
+        dx, dy = b[0] - a[0], b[1] - a[1]
+        t = max(0, min(1, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy or 1)))
+        best = min(best, math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy))
+    return best
+d = [distance((v.dxf.location.x, v.dxf.location.y)) for v in cut.vertices]
+assert min(d) > 10 - 0.1 and any(abs(x - 22) < 0.1 for x in d) and any(abs(x - 10) < 0.1 for x in d), sorted(d)
+PY
 fi
 
 printf '# bad\n0 1 x\n' >bad.txt
