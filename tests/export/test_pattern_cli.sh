@@ -21,7 +21,7 @@
 #
 # SPDX-License-Identifier: GPL-3.0-or-later
 # fontconfig (cairo, pattern.pdf) keeps its caches until exit: not a leak of ours (sanitizer builds).
-export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan-fontconfig.supp${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
+export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan-fontconfig.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
 source "$(dirname "$0")/../cli/lib.sh"
 
 run generate skirt -o skirt.obj --faces 2000 --quiet
