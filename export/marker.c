@@ -18,16 +18,21 @@
  *    separately.
  *  - A unit goes to the lowest, then leftmost, grid position where every
  *    run lies on free cells, in the rotation whose top ends lowest. The
- *    fabric keeps, per cell, the length of the free run to its right: a run
- *    is one lookup, and a blocked run says how far right the next candidate
- *    position is, so a fabric row costs O(obstacles in it), not O(width).
+ *    fabric keeps, per cell, a signed stretch length (the free cells from
+ *    here rightwards, or minus the occupied ones): a run is one lookup, and
+ *    a blocked run says how far right the next candidate is, so a fabric row
+ *    costs O(obstacles in it), not O(width). Before a row is tried, eight
+ *    probe rows of the shape must meet fabric rows with a long enough free
+ *    stretch; maxima over blocks of 32 rows let a probe skip a block at once.
+ *    Placing a shape mends only the stretches around its runs.
  *  - Order: greedy passes over four fixed orders (area, height, width,
- *    large and small alternating), then a local search (swap two pieces or
- *    move one) over a fixed number of passes from a fixed seed, keeping the
- *    shortest marker (ties: the lower sum of the units' tops). Deterministic:
- *    no threads, no clock.
- * Memory: the shapes' runs (O(cells on their rows)), one byte and two int32
- * per fabric cell. Fails with PZ_ERR_DATA for a piece wider than the fabric
+ *    large and small alternating), then a local search (swap two pieces,
+ *    move one, or pin one's rotation) from a fixed seed, keeping the
+ *    shortest marker (ties: the lower sum of the units' tops). The budget is
+ *    counted in grid_find's steps, not timed: deterministic, no threads, no
+ *    clock; a marker of many pieces on a long fabric gets fewer passes.
+ * Memory: the shapes' runs (O(cells on their rows)), three bytes per fabric
+ * cell (occupancy, 16-bit stretch). Fails with PZ_ERR_DATA for a piece wider than the fabric
  * or with a cut-line coordinate out of range, PZ_ERR_USAGE for a fabric
  * width out of range, PZ_ERR_NOMEM.
  *
