@@ -8,17 +8,22 @@
  *     garment.glb, report.html timed, written to a temporary file.
  *  2. A marker of 20 pieces: the same bodice cut into 20 panels.
  *  3. When ../shared/data is there: the diffavatar t-shirt's 4 true pieces
- *     (--panels uv) five times over (20 pieces) on 1500 mm, the realistic
- *     efficiency figure.
+ *     (--panels uv) five times over (20 pieces) on 1500 mm: the issue's
+ *     marker of 20 pieces (goal: under 5 s), and its efficiency.
+ * Or, with `.obj` arguments, the marker of each pattern a `panelize run` or
+ * `flatten` wrote (its garment.obj: panels and pattern from its vt), with the
+ * default options or `--gap MM` (the figures of docs/marker.md).
  * One line per measurement:
- *   bench_marker case=... step=... ms=... [pieces=... length_mm=... efficiency=...] load=...
+ *   bench_marker case=... step=... ms=... [passes=... pieces=... length_mm=... efficiency=...] load=...
  * Timings are wall clock of one run; the load is the 1-minute load average
- * (2 cores: figures taken above 1 are not comparable). Usage: bench_marker [FACES].
+ * (2 cores: figures taken above 1 are not comparable).
+ * Usage: bench_marker [FACES] | bench_marker [--gap MM] PATTERN.obj...
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
 #include "../tests/export/fixture_export_b.h"
+#include "../tests/export/export_fixtures.h"
 
 #include "bench_util.h"
 
@@ -26,9 +31,9 @@ static pz_ctx ctx;
 
 static void print_marker(const char *name, const pz_pieces *pieces, const pz_marker *marker)
 {
-    printf("bench_marker case=%s step=marker ms=%.1f pieces=%d placements=%d length_mm=%.1f efficiency=%.4f "
+    printf("bench_marker case=%s step=marker ms=%.1f passes=%d pieces=%d placements=%d length_mm=%.1f efficiency=%.4f "
            "load=%.2f\n",
-           name, marker->ms, (int)pieces->piece_count, (int)marker->placement_count, marker->length_mm,
+           name, marker->ms, (int)marker->passes, (int)pieces->piece_count, (int)marker->placement_count, marker->length_mm,
            marker->efficiency, bench_load_average());
 }
 
@@ -119,9 +124,44 @@ static void bench_tshirt(const char *data)
     pz_mesh_free(&mesh);
 }
 
+/* The pattern a `panelize run` or `flatten` wrote (its garment.obj): pieces with the defaults, their marker. */
+static void bench_pattern_obj(const char *path, double gap_mm)
+{
+    fixture f;
+    if (!fixture_from_pattern_obj(&f, path))
+        return;
+    pz_export_options options;
+    pz_export_options_default(&options);
+    if (gap_mm >= 0)
+        options.gap_mm = gap_mm;
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+    pz_marker *marker = NULL;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    char name[256];
+    snprintf(name, sizeof name, "%s", path);
+    for (char *c = name; *c; ++c)
+        if (*c == ' ')
+            *c = '_';
+    print_marker(name, pieces, marker);
+    pz_marker_free(&marker);
+    pz_pieces_free(&pieces);
+    fixture_free(&f);
+}
+
 int main(int argc, char **argv)
 {
     ctx.quiet = 1;
+    double gap_mm = -1;
+    if (argc > 2 && strcmp(argv[1], "--gap") == 0) {
+        gap_mm = atof(argv[2]);
+        argc -= 2, argv += 2;
+    }
+    if (argc > 1 && strstr(argv[1], ".obj")) {
+        for (int i = 1; i < argc; ++i)
+            bench_pattern_obj(argv[i], gap_mm);
+        return test_finish() == 0 ? 0 : 1;
+    }
     int32_t faces = argc > 1 ? (int32_t)atoi(argv[1]) : 50000;
     bench_bodice(faces, 8, 1);
     bench_bodice(faces, 20, 0);

@@ -13,7 +13,8 @@
  *                         "Piece Name: ...", "Quantity: N", "Size: ..."
  *               layer 14  sew line (closed POLYLINE)
  *               layer 4   notches: LINEs from the cut line inward, as long
- *                         as the notch is deep
+ *                         as the notch is deep (one per place: the ends of
+ *                         two seams at a corner are one notch)
  *               layer 7   grain line (a LINE along the warp, tail to head)
  *               layer 8   internal lines: dart legs, fold lines, tip marks
  *   ENTITIES  one INSERT per block at its place on the sheet (the layout of
@@ -28,6 +29,8 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/notches.h"
+#include "export/stream_status.h"
 
 #include <ctype.h>
 #include <math.h>
@@ -222,26 +225,60 @@ static void sanitize(const char *name, char out[64])
         snprintf(out, 64, "piece");
 }
 
-/* The block name of piece p: its sanitized name, with "_K" (the panel) when another drawn piece's clashes. */
-static void block_name(const pz_pieces *pieces, int32_t p, char out[64])
+typedef char block_label[64];
+
+typedef struct named {
+    const char *name;
+    int32_t piece;
+    int clash;
+} named;
+
+static int compare_named(const void *a, const void *b)
 {
-    char mine[64], theirs[64];
-    sanitize(pieces->pieces[p].name, mine);
-    int clash = 0;
-    for (int32_t q = 0; q < pieces->piece_count && !clash; ++q) {
-        if (q == p || pieces->pieces[q].mirrored)
-            continue;
-        sanitize(pieces->pieces[q].name, theirs);
-        clash = strcmp(theirs, mine) == 0;
-    }
-    snprintf(out, 64, clash ? "%s_%d" : "%s", mine, (int)pieces->pieces[p].panel);
+    const named *x = a, *y = b;
+    int order = strcmp(x->name, y->name);
+    return order ? order : (x->piece > y->piece) - (x->piece < y->piece);
 }
 
-static void piece_block(const dxf *d, const pz_pieces *pieces, int32_t p)
+/*
+ * The block name of every drawn piece (names: piece_count): its sanitized
+ * name, with "_K" (the panel) appended when another drawn piece's is the
+ * same -- found by sorting, O(P log P), and repeated should an appended name
+ * meet another. 0 when out of memory.
+ */
+static int block_names(const pz_pieces *pieces, block_label *names)
+{
+    named *order = malloc(((size_t)pieces->piece_count + 1) * sizeof *order);
+    if (!order)
+        return 0;
+    int32_t count = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        if (!pieces->pieces[p].mirrored) {
+            sanitize(pieces->pieces[p].name, names[p]);
+            order[count++] = (named){names[p], p, 0};
+        }
+    for (int round = 0, clashes = 1; clashes && round < 4; ++round) {
+        qsort(order, (size_t)count, sizeof *order, compare_named);
+        clashes = 0;
+        for (int32_t i = 0; i < count; ++i)  /* marked first: the names change below */
+            order[i].clash = (i > 0 && strcmp(order[i].name, order[i - 1].name) == 0) ||
+                             (i + 1 < count && strcmp(order[i].name, order[i + 1].name) == 0);
+        for (int32_t i = 0; i < count; ++i)
+            if (order[i].clash) {
+                char *name = names[order[i].piece];
+                size_t length = strlen(name);
+                snprintf(name + length, sizeof(block_label) - length, "_%d", (int)pieces->pieces[order[i].piece].panel);
+                clashes = 1;
+            }
+    }
+    free(order);
+    return 1;
+}
+
+static void piece_block(const dxf *d, const pz_pieces *pieces, int32_t p, const char *name)
 {
     const pz_piece *piece = &pieces->pieces[p];
-    char name[64], line_text[160];
-    block_name(pieces, p, name);
+    char line_text[160];
     group(d, 0, "BLOCK");
     group(d, 8, "0");
     group(d, 2, name);
@@ -250,12 +287,18 @@ static void piece_block(const dxf *d, const pz_pieces *pieces, int32_t p)
     group(d, 3, name);
     polyline(d, "1", piece->cut, piece->cut_count, 1);
     polyline(d, "14", piece->sew, piece->sew_count, 1);
+    /* Two seams' ends at one corner are one notch for the cutter (all of them when out of memory for that). */
+    char(*labels)[PZ_NOTCH_LABELS_MAX] = malloc(((size_t)piece->notch_count + 1) * sizeof *labels);
+    int joined = labels && pz_piece_notch_labels(piece, labels);
     for (int32_t i = 0; i < piece->notch_count; ++i) {
         const pz_notch *n = &piece->notches[i];
+        if (joined && !labels[i][0])
+            continue;
         double inner[2] = {n->cut_point[0] - n->depth_mm * n->direction[0],
                            n->cut_point[1] - n->depth_mm * n->direction[1]};
         line(d, "4", n->cut_point, inner);
     }
+    free(labels);
     line(d, "7", piece->grain[0], piece->grain[1]);
     for (int32_t i = 0; i < piece->line_count; ++i)
         polyline(d, "8", piece->lines[i].points, piece->lines[i].point_count, 0);
@@ -270,10 +313,8 @@ static void piece_block(const dxf *d, const pz_pieces *pieces, int32_t p)
     group(d, 8, "0");
 }
 
-static void insert(const dxf *d, const pz_pieces *pieces, int32_t p, const double offset[2])
+static void insert(const dxf *d, const char *name, const double offset[2])
 {
-    char name[64];
-    block_name(pieces, p, name);
     group(d, 0, "INSERT");
     group(d, 8, "0");
     group(d, 2, name);
@@ -287,6 +328,12 @@ pz_status pz_export_write_dxf(FILE *file, const pz_export_inputs *inputs, const 
     if (!offsets)
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
     pz_pieces_sheet_layout(pieces, SHEET_GAP_MM, 4 * TEXT_MM, offsets, size);
+    block_label *names = malloc(((size_t)pieces->piece_count + 1) * sizeof *names);
+    if (!names || !block_names(pieces, names)) {
+        free(names);
+        free(offsets);
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
+    }
     dxf d = {file, inputs->options && inputs->options->dxf_strict};
     header(&d, size);
     if (!d.strict)
@@ -295,13 +342,13 @@ pz_status pz_export_write_dxf(FILE *file, const pz_export_inputs *inputs, const 
     group(&d, 2, "BLOCKS");
     for (int32_t p = 0; p < pieces->piece_count; ++p)
         if (!pieces->pieces[p].mirrored)
-            piece_block(&d, pieces, p);
+            piece_block(&d, pieces, p, names[p]);
     group(&d, 0, "ENDSEC");
     group(&d, 0, "SECTION");
     group(&d, 2, "ENTITIES");
     for (int32_t p = 0; p < pieces->piece_count; ++p)
         if (!pieces->pieces[p].mirrored)
-            insert(&d, pieces, p, &offsets[2 * p]);
+            insert(&d, names[p], &offsets[2 * p]);
     char line_text[160];
     snprintf(line_text, sizeof line_text, "Style Name: %s", pieces->garment_name);
     text(&d, "1", SHEET_GAP_MM, size[1] - 1.5 * TEXT_MM, TEXT_MM, line_text);
@@ -310,6 +357,7 @@ pz_status pz_export_write_dxf(FILE *file, const pz_export_inputs *inputs, const 
     text(&d, "1", SHEET_GAP_MM, size[1] - 4.5 * TEXT_MM, TEXT_MM, "Units: METRIC");
     group(&d, 0, "ENDSEC");
     group(&d, 0, "EOF");
+    free(names);
     free(offsets);
-    return PZ_OK;
+    return pz_export_stream_status(file, 0, name, ctx);
 }

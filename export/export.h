@@ -165,6 +165,7 @@ typedef struct pz_marker {
     double fabric_width_mm;
     double length_mm;            /* used length of the fabric */
     double efficiency;           /* sum of piece areas (cut lines) / (width x length) */
+    int32_t passes;              /* greedy placement passes the search ran (docs/marker.md) */
     double ms;                   /* time to build */
 } pz_marker;
 

@@ -22,6 +22,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/stream_status.h"
 #include "export/xml_text.h"
 
 #include <math.h>
@@ -393,5 +394,5 @@ pz_status pz_export_write_report_html(FILE *file, const pz_export_inputs *inputs
     put_array_table(file, cJSON_GetObjectItemCaseSensitive(report, "darts"), "Darts", "darts");
     put_object_table(file, cJSON_GetObjectItemCaseSensitive(report, "timings_ms"), "Timings (ms)", "timings");
     fputs("<p>Written by panelize " PZ_VERSION_STRING ".</p>\n</body>\n</html>\n", file);
-    return ferror(file) ? pz_error(ctx, PZ_ERR_CREATE, "%s: write error", name) : PZ_OK;
+    return pz_export_stream_status(file, 0, name, ctx);
 }

@@ -2,34 +2,58 @@
  * export/marker.c -- the marker: every piece nested on a strip of fabric
  * (x across the fabric width, y along its length), and marker.svg.
  *
- * Method (docs/marker.md): raster bottom-left fill.
- *  - Each piece (in each of its two allowed orientations, 0 and 180 degrees:
- *    the grain stays true) is rasterized on a grid of `resolution` mm cells,
- *    conservatively: a cell is set when it may touch the cut line dilated by
- *    gap/2. Two placements whose masks share no cell are therefore at least
- *    `gap` apart, exactly (no tolerance on the polygons themselves).
- *  - A Cut-2 piece is one unit: the first copy and its mirror image (x -> -x,
- *    grain still along +y) pushed against it on the right, same rotation.
- *    When the pair is wider than the fabric the two copies go separately.
- *  - Units are placed one by one; for each the fabric grid is scanned row by
- *    row from the bottom, and within a row from the left; the first free
- *    position (per-row free-run lengths make each mask row an O(1) test) is
- *    the lowest for that orientation. The orientation whose piece top ends
- *    lowest wins (ties: 0 degrees), which fills holes left below.
- *  - That greedy pass runs for four piece orders (area, height, width, and
- *    area with large and small pieces alternating); the shortest marker wins.
- *  - The result is deterministic: no threads, no randomness.
- * Memory: one byte per grid cell of the masks, two int32 per fabric cell.
- * Fails with PZ_ERR_DATA for a piece wider than the fabric, PZ_ERR_NOMEM.
+ * Method (docs/marker.md): raster bottom-left fill over the true shapes,
+ * with a search over the order in which pieces are placed.
+ *  - Grid: square cells of `resolution` mm (fabric width / 1000, at least
+ *    1 mm). Each piece copy, in each allowed orientation (0 and 180 degrees:
+ *    the grain stays true; the second copy of a Cut-2 piece mirrored x -> -x
+ *    first), is rasterized conservatively: a cell is set when it may touch
+ *    the cut line dilated by gap/2. Two placements whose cells are disjoint
+ *    are therefore at least `gap` apart, exactly. A shape is kept as runs of
+ *    set cells per row, so concave outlines keep their hollows and other
+ *    pieces can reach into them.
+ *  - A Cut-2 piece is one unit: copy 0 and its mirror image pushed against
+ *    its right side as close as their cells allow, in the four rotation
+ *    combinations. When no combination fits across the fabric the copies go
+ *    separately.
+ *  - A unit goes to the lowest, then leftmost, grid position where every
+ *    run lies on free cells, in the rotation whose top ends lowest. The
+ *    fabric keeps, per cell, a signed stretch length (the free cells from
+ *    here rightwards, or minus the occupied ones): a run is one lookup, and
+ *    a blocked run says how far right the next candidate is, so a fabric row
+ *    costs O(obstacles in it), not O(width). Before a row is tried, eight
+ *    probe rows of the shape must meet fabric rows with a long enough free
+ *    stretch; maxima over blocks of 32 rows let a probe skip a block at once.
+ *    Placing a shape mends only the stretches around its runs.
+ *  - Order: greedy passes over four fixed orders (area, height, width,
+ *    large and small alternating), then a local search (swap two pieces,
+ *    move one, or pin one's rotation) from a fixed seed, keeping the
+ *    shortest marker (ties: the lower sum of the units' tops). The budget is
+ *    counted in grid_find's steps, not timed: deterministic, no threads, no
+ *    clock; a marker of many pieces on a long fabric gets fewer passes.
+ * Memory: the shapes' runs (O(cells on their rows)), three bytes per fabric
+ * cell (occupancy, 16-bit stretch). Fails with PZ_ERR_DATA for a piece wider than the fabric
+ * or with a cut-line coordinate out of range, PZ_ERR_USAGE for a fabric
+ * width out of range, PZ_ERR_NOMEM.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/stream_status.h"
 #include "export/xml_text.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Grid cells across the fabric: finer wastes less fabric to the raster, coarser is faster. */
+#define CELLS_ACROSS 1000.0
+/* The local search's budget, counted in grid_find's steps (rows and positions tried, about 10-50 ns each):
+ * deterministic, unlike a clock. At most SEARCH_MAX_PASSES passes in all ... */
+#define SEARCH_WORK 3000000
+#define SEARCH_MAX_PASSES 150
+/* ... and it stops after this many passes in a row that did not shorten the best marker. */
+#define SEARCH_STALL 60
 
 /* ------------------------------------------------------------------ transforms */
 
@@ -46,48 +70,67 @@ void pz_marker_place_points(const pz_piece *piece, const pz_marker_placement *pl
     }
 }
 
-/* ------------------------------------------------------------------ masks */
+/* ------------------------------------------------------------------ shapes */
 
-/* A piece (or a pair) rasterized: width x height cells, origin at grid cell (0, 0). */
-typedef struct mask {
+/* Rows of a shape whose longest run a fabric row must hold before any column is tried there. */
+#define PROBES 8
+
+/* A rasterized unit: per row, runs of set cells; column c covers [c, c + 1) x resolution, local to the shape. */
+typedef struct shape {
     int32_t width, height;
-    uint8_t *cells;        /* height rows of width */
-    int32_t *row_first;    /* height: first set column, or -1 for an empty row */
-    int32_t *row_last;     /* height: last set column */
-} mask;
+    int32_t *row_start;    /* height + 1: the runs of row r are runs[2 row_start[r] .. 2 row_start[r + 1]) */
+    int32_t *runs;         /* first, last column of each run (inclusive) */
+    int32_t widest_row;    /* the row of the longest run ... */
+    int32_t widest;        /* ... and its length - 1 (-1 for an empty shape) */
+    int32_t probe_row[PROBES], probe_width[PROBES]; /* rows spread over the height and their longest run - 1 */
+} shape;
 
-static void mask_clear(mask *m)
+static void shape_clear(shape *s)
 {
-    free(m->cells);
-    free(m->row_first);
-    free(m->row_last);
-    memset(m, 0, sizeof *m);
+    free(s->row_start);
+    free(s->runs);
+    memset(s, 0, sizeof *s);
 }
 
-static int mask_alloc(mask *m, int32_t width, int32_t height)
+/* The runs of a width x height cell bitmap. 0 when out of memory. */
+static int shape_from_cells(shape *s, const uint8_t *cells, int32_t width, int32_t height)
 {
-    m->width = width, m->height = height;
-    m->cells = calloc((size_t)width * (size_t)height, 1);
-    m->row_first = malloc((size_t)height * sizeof(int32_t));
-    m->row_last = malloc((size_t)height * sizeof(int32_t));
-    return m->cells && m->row_first && m->row_last;
-}
-
-/* Fills each row's extent. A row's set cells are taken as one run (holes inside a row are filled):
- * conservative, and what makes the fit test O(1) per row. */
-static void mask_rows(mask *m)
-{
-    for (int32_t y = 0; y < m->height; ++y) {
-        const uint8_t *row = m->cells + (size_t)y * (size_t)m->width;
-        int32_t first = -1, last = -1;
-        for (int32_t x = 0; x < m->width; ++x)
-            if (row[x]) {
-                if (first < 0)
-                    first = x;
-                last = x;
-            }
-        m->row_first[y] = first, m->row_last[y] = last;
+    memset(s, 0, sizeof *s);
+    size_t count = 0;
+    for (size_t i = 0; i < (size_t)width * (size_t)height; ++i)
+        count += cells[i] && (i % (size_t)width == 0 || !cells[i - 1]);
+    s->width = width, s->height = height, s->widest = -1;
+    s->row_start = malloc(((size_t)height + 1) * sizeof(int32_t));
+    s->runs = malloc((2 * count + 1) * sizeof(int32_t));
+    if (!s->row_start || !s->runs) {
+        shape_clear(s);
+        return 0;
     }
+    int32_t run = 0;
+    for (int32_t y = 0; y < height; ++y) {
+        const uint8_t *row = cells + (size_t)y * (size_t)width;
+        s->row_start[y] = run;
+        for (int32_t x = 0; x < width; ++x) {
+            if (!row[x] || (x > 0 && row[x - 1]))
+                continue;
+            int32_t last = x;
+            while (last + 1 < width && row[last + 1])
+                ++last;
+            s->runs[2 * run] = x, s->runs[2 * run + 1] = last;
+            if (last - x > s->widest)
+                s->widest = last - x, s->widest_row = y;
+            ++run;
+        }
+    }
+    s->row_start[height] = run;
+    for (int k = 0; k < PROBES; ++k) {
+        int32_t r = k == 0 ? s->widest_row : (int32_t)((int64_t)(height - 1) * (k - 1) / (PROBES - 2));
+        s->probe_row[k] = r, s->probe_width[k] = -1;
+        for (int32_t i = s->row_start[r]; i < s->row_start[r + 1]; ++i)
+            if (s->runs[2 * i + 1] - s->runs[2 * i] > s->probe_width[k])
+                s->probe_width[k] = s->runs[2 * i + 1] - s->runs[2 * i];
+    }
+    return 1;
 }
 
 static double segment_distance(double px, double py, const double *a, const double *b)
@@ -101,19 +144,20 @@ static double segment_distance(double px, double py, const double *a, const doub
 }
 
 /*
- * Rasterizes the closed polygon `points` (n x 2, already transformed) with its
- * lower-left at `origin`: cells whose centre is inside, and cells whose centre
- * lies within `reach` of an edge (reach = gap/2 + half the cell diagonal, so
- * every cell touching the dilated polygon is set). 0 when out of memory.
+ * Rasterizes the closed polygon `points` (n x 2, already transformed) into
+ * `cells` (width x height) with its lower-left at `origin`: cells whose
+ * centre is inside, and cells whose centre lies within `reach` of an edge
+ * (reach = gap/2 + half the cell diagonal, so every cell touching the
+ * dilated polygon is set). 0 when out of memory.
  */
-static int mask_draw_polygon(mask *m, const double *points, int32_t n, const double origin[2], double resolution,
-                             double reach)
+static int draw_polygon(uint8_t *cells, int32_t width, int32_t height, const double *points, int32_t n,
+                        const double origin[2], double resolution, double reach)
 {
     /* Inside: even-odd scanline through each row's centre. */
     double *crossings = malloc((size_t)(n + 1) * sizeof(double));
     if (!crossings)
         return 0;
-    for (int32_t y = 0; y < m->height; ++y) {
+    for (int32_t y = 0; y < height; ++y) {
         double cy = origin[1] + (y + 0.5) * resolution;
         int32_t count = 0;
         for (int32_t i = 0; i < n; ++i) {
@@ -129,8 +173,8 @@ static int mask_draw_polygon(mask *m, const double *points, int32_t n, const dou
         for (int32_t i = 0; i + 1 < count; i += 2) {
             int32_t x0 = (int32_t)ceil((crossings[i] - origin[0]) / resolution - 0.5);
             int32_t x1 = (int32_t)floor((crossings[i + 1] - origin[0]) / resolution - 0.5);
-            for (int32_t x = x0 < 0 ? 0 : x0; x <= x1 && x < m->width; ++x)
-                m->cells[(size_t)y * (size_t)m->width + (size_t)x] = 1;
+            for (int32_t x = x0 < 0 ? 0 : x0; x <= x1 && x < width; ++x)
+                cells[(size_t)y * (size_t)width + (size_t)x] = 1;
         }
     }
     free(crossings);
@@ -141,9 +185,9 @@ static int mask_draw_polygon(mask *m, const double *points, int32_t n, const dou
         int32_t x1 = (int32_t)ceil((fmax(a[0], b[0]) + reach - origin[0]) / resolution);
         int32_t y0 = (int32_t)floor((fmin(a[1], b[1]) - reach - origin[1]) / resolution);
         int32_t y1 = (int32_t)ceil((fmax(a[1], b[1]) + reach - origin[1]) / resolution);
-        for (int32_t y = y0 < 0 ? 0 : y0; y <= y1 && y < m->height; ++y)
-            for (int32_t x = x0 < 0 ? 0 : x0; x <= x1 && x < m->width; ++x) {
-                uint8_t *cell = &m->cells[(size_t)y * (size_t)m->width + (size_t)x];
+        for (int32_t y = y0 < 0 ? 0 : y0; y <= y1 && y < height; ++y)
+            for (int32_t x = x0 < 0 ? 0 : x0; x <= x1 && x < width; ++x) {
+                uint8_t *cell = &cells[(size_t)y * (size_t)width + (size_t)x];
                 if (!*cell && segment_distance(origin[0] + (x + 0.5) * resolution,
                                                origin[1] + (y + 0.5) * resolution, a, b) <= reach)
                     *cell = 1;
@@ -154,28 +198,21 @@ static int mask_draw_polygon(mask *m, const double *points, int32_t n, const dou
 
 /* ------------------------------------------------------------------ units */
 
-/* What gets placed in one go: one piece copy, or a mirrored pair side by side, in one orientation.
- * Coordinates are local to the mask: cell (c, r) covers [c, c+1) x [r, r+1) times the resolution. */
+/* What gets placed in one go: one piece copy, or a mirrored pair, in fixed orientations. */
 typedef struct unit {
     int member_count;
-    pz_marker_placement members[2]; /* offsets map piece coordinates to mask-local mm */
-    mask shape;
-    double lo[2], hi[2];            /* cut-line extent, mask-local mm */
+    pz_marker_placement members[2]; /* offsets map piece coordinates to unit-local mm */
+    shape shape;
+    double lo[2], hi[2];            /* cut-line extent, unit-local mm */
 } unit;
 
-typedef struct nest {
+typedef struct raster {
     double resolution, reach, width_mm;
-    int32_t margin;        /* grid cells left of x = 0 and below y = 0: the gap may hang over the edge */
-    int32_t columns;       /* grid columns, margins included */
-    int32_t rows;          /* rows allocated (everything above is free) */
-    uint8_t *occupied;     /* rows x columns */
-    int32_t *free_run;     /* rows x columns: free cells from here rightwards */
-    int32_t *longest_run;  /* rows: the longest free run of each row */
-} nest;
+} raster;
 
 static void unit_clear(unit *u)
 {
-    mask_clear(&u->shape);
+    shape_clear(&u->shape);
 }
 
 static void points_bounds(const double *points, int32_t n, double lo[2], double hi[2])
@@ -188,8 +225,8 @@ static void points_bounds(const double *points, int32_t n, double lo[2], double 
         }
 }
 
-/* One piece copy as a unit; its mask starts `reach` below and left of its cut line. */
-static int unit_single(const nest *nest, const pz_piece *piece, int32_t index, int copy, int rotation, unit *out)
+/* One piece copy as a unit; its shape starts `reach` below and left of its cut line. 0 when out of memory. */
+static int unit_single(const raster *raster, const pz_piece *piece, int32_t index, int copy, int rotation, unit *out)
 {
     memset(out, 0, sizeof *out);
     pz_marker_placement placement = {index, copy, rotation, copy == 1, {0, 0}};
@@ -199,15 +236,14 @@ static int unit_single(const nest *nest, const pz_piece *piece, int32_t index, i
     pz_marker_place_points(piece, &placement, piece->cut, piece->cut_count, points);
     double lo[2], hi[2];
     points_bounds(points, piece->cut_count, lo, hi);
-    double origin[2] = {lo[0] - nest->reach, lo[1] - nest->reach};
-    int32_t width = (int32_t)ceil((hi[0] + nest->reach - origin[0]) / nest->resolution) + 1;
-    int32_t height = (int32_t)ceil((hi[1] + nest->reach - origin[1]) / nest->resolution) + 1;
-    int ok = mask_alloc(&out->shape, width, height) &&
-             mask_draw_polygon(&out->shape, points, piece->cut_count, origin, nest->resolution, nest->reach);
-    if (ok)
-        mask_rows(&out->shape);
-    else
-        mask_clear(&out->shape);
+    double origin[2] = {lo[0] - raster->reach, lo[1] - raster->reach};
+    int32_t width = (int32_t)ceil((hi[0] + raster->reach - origin[0]) / raster->resolution) + 1;
+    int32_t height = (int32_t)ceil((hi[1] + raster->reach - origin[1]) / raster->resolution) + 1;
+    uint8_t *cells = calloc((size_t)width * (size_t)height, 1);
+    int ok = cells &&
+             draw_polygon(cells, width, height, points, piece->cut_count, origin, raster->resolution, raster->reach) &&
+             shape_from_cells(&out->shape, cells, width, height);
+    free(cells);
     free(points);
     placement.offset[0] = -origin[0], placement.offset[1] = -origin[1];
     out->member_count = 1;
@@ -217,39 +253,73 @@ static int unit_single(const nest *nest, const pz_piece *piece, int32_t index, i
     return ok;
 }
 
-/* 1 when b, shifted right by `shift` cells, shares a cell with a (both bottom-aligned). */
-static int masks_collide(const mask *a, const mask *b, int32_t shift)
+typedef struct interval {
+    int32_t first, last;
+} interval;
+
+static int compare_intervals(const void *a, const void *b)
 {
-    int32_t rows = a->height < b->height ? a->height : b->height;
-    for (int32_t y = 0; y < rows; ++y)
-        if (a->row_first[y] >= 0 && b->row_first[y] >= 0 && b->row_first[y] + shift <= a->row_last[y])
-            return 1;
-    return 0;
+    const interval *x = a, *y = b;
+    return (x->first > y->first) - (x->first < y->first);
 }
 
-/* The pair: `left` (copy 0) with `right` (copy 1, mirrored) pushed against its right side. */
-static int unit_pair(const nest *nest, const unit *left, const unit *right, unit *out)
+/*
+ * The smallest shift s >= 0 (cells) at which `right`, moved right by s, shares
+ * no cell with `left` (both bottom-aligned): run (a, b) of right and (c, d)
+ * of left on one row collide for s in [c - b, d - a]; the answer is the first
+ * s not covered by those intervals. -1 when out of memory.
+ */
+static int32_t pair_shift(const shape *left, const shape *right)
+{
+    int32_t rows = left->height < right->height ? left->height : right->height;
+    size_t count = 0;
+    for (int32_t y = 0; y < rows; ++y)
+        count += (size_t)(left->row_start[y + 1] - left->row_start[y]) *
+                 (size_t)(right->row_start[y + 1] - right->row_start[y]);
+    interval *forbidden = malloc((count + 1) * sizeof *forbidden);
+    if (!forbidden)
+        return -1;
+    size_t n = 0;
+    for (int32_t y = 0; y < rows; ++y)
+        for (int32_t i = right->row_start[y]; i < right->row_start[y + 1]; ++i)
+            for (int32_t j = left->row_start[y]; j < left->row_start[y + 1]; ++j)
+                forbidden[n++] = (interval){left->runs[2 * j] - right->runs[2 * i + 1],
+                                            left->runs[2 * j + 1] - right->runs[2 * i]};
+    qsort(forbidden, n, sizeof *forbidden, compare_intervals);
+    int32_t shift = 0;
+    for (size_t k = 0; k < n && forbidden[k].first <= shift; ++k)
+        if (forbidden[k].last >= shift)
+            shift = forbidden[k].last + 1;
+    free(forbidden);
+    return shift;
+}
+
+/* Paints a shape's runs into a cell bitmap (width columns) at column offset `shift`. */
+static void paint_shape(uint8_t *cells, int32_t width, const shape *s, int32_t shift)
+{
+    for (int32_t y = 0; y < s->height; ++y)
+        for (int32_t i = s->row_start[y]; i < s->row_start[y + 1]; ++i)
+            memset(cells + (size_t)y * (size_t)width + (size_t)(s->runs[2 * i] + shift), 1,
+                   (size_t)(s->runs[2 * i + 1] - s->runs[2 * i] + 1));
+}
+
+/* The pair: `left` (copy 0) with `right` (copy 1, mirrored) pushed against its right side. 0 when out of memory. */
+static int unit_pair(const raster *raster, const unit *left, const unit *right, unit *out)
 {
     memset(out, 0, sizeof *out);
-    int32_t shift = 0;
-    while (shift < left->shape.width && masks_collide(&left->shape, &right->shape, shift))
-        ++shift;
+    int32_t shift = pair_shift(&left->shape, &right->shape);
+    if (shift < 0)
+        return 0;
     int32_t width = shift + right->shape.width > left->shape.width ? shift + right->shape.width : left->shape.width;
     int32_t height = left->shape.height > right->shape.height ? left->shape.height : right->shape.height;
-    if (!mask_alloc(&out->shape, width, height)) {
-        mask_clear(&out->shape);
+    uint8_t *cells = calloc((size_t)width * (size_t)height, 1);
+    if (!cells)
         return 0;
-    }
-    for (int32_t y = 0; y < height; ++y)
-        for (int32_t x = 0; x < width; ++x) {
-            int in_left = y < left->shape.height && x < left->shape.width &&
-                          left->shape.cells[(size_t)y * (size_t)left->shape.width + (size_t)x];
-            int in_right = y < right->shape.height && x >= shift && x - shift < right->shape.width &&
-                           right->shape.cells[(size_t)y * (size_t)right->shape.width + (size_t)(x - shift)];
-            out->shape.cells[(size_t)y * (size_t)width + (size_t)x] = (uint8_t)(in_left || in_right);
-        }
-    mask_rows(&out->shape);
-    double shift_mm = shift * nest->resolution;
+    paint_shape(cells, width, &left->shape, 0);
+    paint_shape(cells, width, &right->shape, shift);
+    int ok = shape_from_cells(&out->shape, cells, width, height);
+    free(cells);
+    double shift_mm = shift * raster->resolution;
     out->member_count = 2;
     out->members[0] = left->members[0];
     out->members[1] = right->members[0];
@@ -258,142 +328,351 @@ static int unit_pair(const nest *nest, const unit *left, const unit *right, unit
     out->hi[0] = fmax(left->hi[0], right->hi[0] + shift_mm);
     out->lo[1] = fmin(left->lo[1], right->lo[1]);
     out->hi[1] = fmax(left->hi[1], right->hi[1]);
+    return ok;
+}
+
+/* Everything one piece may be placed as: its copies in both rotations, and for a Cut-2 piece the pairs. */
+typedef struct demand {
+    int32_t piece;
+    int copies;                  /* 1, or 2 for a Cut-2 piece */
+    unit singles[2][2];          /* [copy][0: 0 degrees, 1: 180] */
+    unit pairs[4];               /* copies == 2: (copy 0, copy 1) turned (0,0) (0,180) (180,0) (180,180) */
+    double keys[3];              /* area, height, width: the fixed orders */
+} demand;
+
+static void demand_clear(demand *d)
+{
+    for (int c = 0; c < 2; ++c)
+        for (int r = 0; r < 2; ++r)
+            unit_clear(&d->singles[c][r]);
+    for (int k = 0; k < 4; ++k)
+        unit_clear(&d->pairs[k]);
+}
+
+static int demand_build(const raster *raster, const pz_pieces *pieces, int32_t index, demand *out)
+{
+    memset(out, 0, sizeof *out);
+    const pz_piece *piece = &pieces->pieces[index];
+    out->piece = index;
+    out->copies = piece->cut_quantity >= 2 ? 2 : 1;
+    out->keys[0] = piece->area_mm2;
+    out->keys[1] = piece->bbox_max[1] - piece->bbox_min[1];
+    out->keys[2] = piece->bbox_max[0] - piece->bbox_min[0];
+    for (int c = 0; c < out->copies; ++c)
+        for (int r = 0; r < 2; ++r)
+            if (!unit_single(raster, piece, index, c, 180 * r, &out->singles[c][r]))
+                return 0;
+    for (int k = 0; out->copies == 2 && k < 4; ++k)
+        if (!unit_pair(raster, &out->singles[0][k / 2], &out->singles[1][k % 2], &out->pairs[k]))
+            return 0;
     return 1;
 }
 
 /* ------------------------------------------------------------------ the fabric grid */
 
-static int nest_grow(nest *nest, int32_t rows)
+/* Stretch lengths fit in 16 bits (grid_make keeps the columns below 32000): half the memory traffic. */
+typedef int16_t stretch;
+#define MAX_COLUMNS 32000
+
+/* Rows per block of the block maxima that let grid_find skip full stretches of fabric (divides 256). */
+#define ROW_BLOCK 32
+
+typedef struct grid {
+    raster raster;
+    int32_t margin;        /* cells left of x = 0 and below y = 0: the gap may hang over the edge */
+    int32_t columns;       /* grid columns, margins included */
+    int32_t rows;          /* rows allocated (everything above is free) */
+    int32_t dirty_rows;    /* rows written since the last reset */
+    uint8_t *occupied;     /* rows x columns */
+    stretch *free_run;     /* rows x columns: free cells from here rightwards, or minus the occupied ones */
+    int32_t *longest_run;  /* rows: the longest free run of each row */
+    int32_t *block_longest; /* rows / ROW_BLOCK: the longest free run of each block of rows */
+    int64_t work;          /* rows and positions tried by grid_find: the search's budget counts them */
+} grid;
+
+static void grid_free(grid *g)
 {
-    if (rows <= nest->rows)
+    free(g->occupied);
+    free(g->free_run);
+    free(g->longest_run);
+    free(g->block_longest);
+}
+
+/* Rows [from, to) free again (from and to multiples of ROW_BLOCK, or to = from). */
+static void grid_clear_rows(grid *g, int32_t from, int32_t to)
+{
+    for (int32_t b = from / ROW_BLOCK; b < (to + ROW_BLOCK - 1) / ROW_BLOCK; ++b)
+        g->block_longest[b] = g->columns;
+    for (int32_t y = from; y < to; ++y) {
+        g->longest_run[y] = g->columns;
+        memset(g->occupied + (size_t)y * (size_t)g->columns, 0, (size_t)g->columns);
+        stretch *run = g->free_run + (size_t)y * (size_t)g->columns;
+        for (int32_t x = 0; x < g->columns; ++x)
+            run[x] = (stretch)(g->columns - x);
+    }
+}
+
+static int grid_grow(grid *g, int32_t rows)
+{
+    if (rows <= g->rows)
         return 1;
-    int32_t new_rows = nest->rows ? nest->rows : 256;
+    int32_t new_rows = g->rows ? g->rows : 256;
     while (new_rows < rows)
         new_rows *= 2;
-    size_t cells = (size_t)new_rows * (size_t)nest->columns;
-    uint8_t *occupied = realloc(nest->occupied, cells);
+    size_t cells = (size_t)new_rows * (size_t)g->columns;
+    uint8_t *occupied = realloc(g->occupied, cells);
     if (!occupied)
         return 0;
-    nest->occupied = occupied;
-    int32_t *free_run = realloc(nest->free_run, cells * sizeof(int32_t));
+    g->occupied = occupied;
+    stretch *free_run = realloc(g->free_run, cells * sizeof(stretch));
     if (!free_run)
         return 0;
-    nest->free_run = free_run;
-    int32_t *longest_run = realloc(nest->longest_run, (size_t)new_rows * sizeof(int32_t));
+    g->free_run = free_run;
+    int32_t *longest_run = realloc(g->longest_run, (size_t)new_rows * sizeof(int32_t));
     if (!longest_run)
         return 0;
-    nest->longest_run = longest_run;
-    for (int32_t y = nest->rows; y < new_rows; ++y) {
-        nest->longest_run[y] = nest->columns;
-        memset(nest->occupied + (size_t)y * (size_t)nest->columns, 0, (size_t)nest->columns);
-        for (int32_t x = 0; x < nest->columns; ++x)
-            nest->free_run[(size_t)y * (size_t)nest->columns + (size_t)x] = nest->columns - x;
-    }
-    nest->rows = new_rows;
+    g->longest_run = longest_run;
+    int32_t *block_longest = realloc(g->block_longest, (size_t)(new_rows / ROW_BLOCK) * sizeof(int32_t));
+    if (!block_longest)
+        return 0;
+    g->block_longest = block_longest;
+    grid_clear_rows(g, g->rows, new_rows);
+    g->rows = new_rows;
     return 1;
 }
 
-static void nest_update_row(nest *nest, int32_t y)
+/* Everything free again, for the next pass. */
+static void grid_reset(grid *g)
 {
-    const uint8_t *row = nest->occupied + (size_t)y * (size_t)nest->columns;
-    int32_t *run = nest->free_run + (size_t)y * (size_t)nest->columns;
-    int32_t count = 0, longest = 0;
-    for (int32_t x = nest->columns - 1; x >= 0; --x) {
-        count = row[x] ? 0 : count + 1;
-        run[x] = count;
-        longest = count > longest ? count : longest;
-    }
-    nest->longest_run[y] = longest;
+    grid_clear_rows(g, 0, (g->dirty_rows + ROW_BLOCK - 1) / ROW_BLOCK * ROW_BLOCK);
+    g->dirty_rows = 0;
 }
 
-/* 1 when the mask fits with its cell (0, 0) at grid cell (x, y): one lookup per mask row. */
-static int nest_fits(const nest *nest, const mask *shape, int32_t x, int32_t y)
+/*
+ * Marks columns [first, last] of row y occupied and mends the stretch counts
+ * around them: cells in the run and to its left, back to where the
+ * stretch that ends at the run began, and the row's longest free stretch
+ * (one step per stretch). Cells right of the run keep their counts.
+ */
+static void grid_fill_run(grid *g, int32_t y, int32_t first, int32_t last)
 {
-    for (int32_t r = 0; r < shape->height; ++r) {
-        int32_t first = shape->row_first[r];
-        if (first < 0)
+    uint8_t *row = g->occupied + (size_t)y * (size_t)g->columns;
+    stretch *run = g->free_run + (size_t)y * (size_t)g->columns;
+    memset(row + first, 1, (size_t)(last - first + 1));
+    int32_t count = last + 1 < g->columns && run[last + 1] < 0 ? run[last + 1] : 0;
+    for (int32_t x = last; x >= first; --x)
+        run[x] = (stretch)--count;
+    /* Left of the run: an occupied stretch grows, a free one now ends at `first`. */
+    int32_t x = first - 1;
+    if (x >= 0 && row[x])
+        for (; x >= 0 && row[x]; --x)
+            run[x] = (stretch)--count;
+    else
+        for (count = 0; x >= 0 && !row[x]; --x)
+            run[x] = (stretch)++count;
+    int32_t longest = 0;
+    for (x = 0; x < g->columns; x += run[x] > 0 ? run[x] : -run[x])
+        longest = run[x] > longest ? run[x] : longest;
+    g->longest_run[y] = longest;
+}
+
+/*
+ * 0 when the shape fits with its cell (0, 0) at grid cell (x, y); else the
+ * next column worth trying on this row. A run (a, b) whose first cell is
+ * occupied moves past the occupied stretch; one whose free stretch ends
+ * inside it moves past the stretch that blocks it (no position in between
+ * can work). The widest row is tried first: it fails most often.
+ */
+static int32_t grid_blocked(const grid *g, const shape *s, int32_t x, int32_t y)
+{
+    for (int32_t k = -1; k < s->height; ++k) {
+        int32_t r = k < 0 ? s->widest_row : k;
+        if (k == s->widest_row)
             continue;
-        if (y + r >= nest->rows)
-            return 1; /* rows above the allocated ones are empty */
-        int32_t run = nest->free_run[(size_t)(y + r) * (size_t)nest->columns + (size_t)(x + first)];
-        if (run <= shape->row_last[r] - first)
-            return 0;
+        if (y + r >= g->rows)
+            continue; /* rows above the allocated ones are empty */
+        const stretch *run = g->free_run + (size_t)(y + r) * (size_t)g->columns + x;
+        for (int32_t i = s->row_start[r]; i < s->row_start[r + 1]; ++i) {
+            int32_t first = s->runs[2 * i], stretch = run[first];
+            if (stretch <= 0)
+                return x - stretch;
+            if (stretch <= s->runs[2 * i + 1] - first)
+                return x + stretch - run[first + stretch];
+        }
     }
-    return 1;
+    return 0;
 }
 
-/* The lowest, then leftmost, grid cell where the unit fits with its cut line inside the fabric. */
-static int nest_find(const nest *nest, const unit *u, int32_t *x_out, int32_t *y_out)
+/* The lowest, then leftmost, grid cell where the unit fits with its cut line inside the fabric; 0 if none. */
+static int grid_find(grid *g, const unit *u, int32_t *x_out, int32_t *y_out)
 {
-    int32_t x_lo = (int32_t)ceil(-u->lo[0] / nest->resolution) + nest->margin;
-    int32_t x_hi = (int32_t)floor((nest->width_mm - u->hi[0]) / nest->resolution) + nest->margin;
-    int32_t y_lo = (int32_t)ceil(-u->lo[1] / nest->resolution) + nest->margin;
+    const double resolution = g->raster.resolution;
+    int32_t x_lo = (int32_t)ceil(-u->lo[0] / resolution) + g->margin;
+    int32_t x_hi = (int32_t)floor((g->raster.width_mm - u->hi[0]) / resolution) + g->margin;
+    int32_t y_lo = (int32_t)ceil(-u->lo[1] / resolution) + g->margin;
     if (x_lo < 0)
         x_lo = 0;
-    if (x_hi + u->shape.width > nest->columns)
-        x_hi = nest->columns - u->shape.width;
+    if (x_hi + u->shape.width > g->columns)
+        x_hi = g->columns - u->shape.width;
     if (y_lo < 0)
         y_lo = 0;
-    if (x_lo > x_hi)
+    if (x_lo > x_hi || u->shape.widest < 0)
         return 0;
-    /* The mask's widest row: a fabric row whose longest free run is shorter cannot take it anywhere. */
-    int32_t widest_row = 0, widest = -1;
-    for (int32_t r = 0; r < u->shape.height; ++r)
-        if (u->shape.row_first[r] >= 0 && u->shape.row_last[r] - u->shape.row_first[r] > widest)
-            widest = u->shape.row_last[r] - u->shape.row_first[r], widest_row = r;
-    for (int32_t y = y_lo; y <= nest->rows; ++y) {
-        if (y + widest_row < nest->rows && nest->longest_run[y + widest_row] <= widest)
+    const shape *s = &u->shape;
+    for (int32_t y = y_lo;; ++y) {
+        ++g->work;
+        /* A probe row needs a fabric row with a free run as long as its own: a block of fabric rows none of
+         * which has one moves y past that block at once, a single such row moves y by one. */
+        int32_t skip_to = y, hopeless = 0;
+        for (int k = 0; k < PROBES; ++k) {
+            int32_t at = y + s->probe_row[k];
+            if (at >= g->rows)
+                continue;
+            if (g->block_longest[at / ROW_BLOCK] <= s->probe_width[k]) {
+                int32_t past = (at / ROW_BLOCK + 1) * ROW_BLOCK - s->probe_row[k];
+                skip_to = past > skip_to ? past : skip_to;
+            }
+            hopeless |= g->longest_run[at] <= s->probe_width[k];
+        }
+        if (skip_to > y) {
+            y = skip_to - 1;
             continue;
-        for (int32_t x = x_lo; x <= x_hi; ++x)
-            if (nest_fits(nest, &u->shape, x, y)) {
+        }
+        if (hopeless)
+            continue;
+        for (int32_t x = x_lo; x <= x_hi;) {
+            int32_t next = grid_blocked(g, s, x, y);
+            ++g->work;
+            if (next == 0) {
                 *x_out = x, *y_out = y;
                 return 1;
             }
+            x = next > x ? next : x + 1;
+        }
+        if (y >= g->rows)
+            return 0; /* not reached: a free row takes any shape that fits across */
     }
-    return 0; /* not reached: the first row above the allocated ones is empty */
 }
 
-static int nest_occupy(nest *nest, const mask *shape, int32_t x, int32_t y)
+static int grid_occupy(grid *g, const shape *s, int32_t x, int32_t y)
 {
-    if (!nest_grow(nest, y + shape->height))
+    if (!grid_grow(g, y + s->height))
         return 0;
-    for (int32_t r = 0; r < shape->height; ++r) {
-        for (int32_t c = 0; c < shape->width; ++c)
-            if (shape->cells[(size_t)r * (size_t)shape->width + (size_t)c])
-                nest->occupied[(size_t)(y + r) * (size_t)nest->columns + (size_t)(x + c)] = 1;
-        nest_update_row(nest, y + r);
+    for (int32_t r = 0; r < s->height; ++r)
+        for (int32_t i = s->row_start[r]; i < s->row_start[r + 1]; ++i)
+            grid_fill_run(g, y + r, x + s->runs[2 * i], x + s->runs[2 * i + 1]);
+    for (int32_t b = y / ROW_BLOCK; b <= (y + s->height - 1) / ROW_BLOCK; ++b) {
+        int32_t longest = 0;
+        for (int32_t r = b * ROW_BLOCK; r < (b + 1) * ROW_BLOCK; ++r)
+            longest = g->longest_run[r] > longest ? g->longest_run[r] : longest;
+        g->block_longest[b] = longest;
     }
+    if (y + s->height > g->dirty_rows)
+        g->dirty_rows = y + s->height;
     return 1;
 }
 
-/* ------------------------------------------------------------------ building */
+/* ------------------------------------------------------------------ one greedy pass */
 
-/* A piece and the key that orders the placement (larger first). */
-typedef struct demand {
-    int32_t piece;
-    double key;
-} demand;
+/* What a pass achieved: the marker's length (the highest cut-line point) and the sum of the units' tops. */
+typedef struct pass_score {
+    double length, tops;
+} pass_score;
 
-static int demand_by_key(const void *a, const void *b)
+static int score_better(pass_score a, pass_score b)
 {
-    const demand *x = a, *y = b;
-    if (x->key != y->key)
-        return x->key < y->key ? 1 : -1;
-    return x->piece < y->piece ? -1 : x->piece > y->piece;
+    if (fabs(a.length - b.length) > 1e-6)
+        return a.length < b.length;
+    return a.tops < b.tops - 1e-6;
 }
 
-/* The orders tried: by area, by height, by width, and by area with large and small pieces alternating
- * (a small piece then fills the room a large one leaves beside it). */
-enum { kOrderCount = 4 };
-
-static void order_pieces(const pz_pieces *pieces, int which, demand *order, int32_t count, demand *scratch)
+/* Places the unit of the lowest top among `candidates`; *placed = 0 when none fits across the fabric. */
+static int place_best(grid *g, const unit *candidates, int count, pz_marker_placement *out, int32_t *out_count,
+                      pass_score *score, int *placed)
 {
-    for (int32_t i = 0; i < count; ++i) {
-        const pz_piece *piece = &pieces->pieces[order[i].piece];
-        double width = piece->bbox_max[0] - piece->bbox_min[0], height = piece->bbox_max[1] - piece->bbox_min[1];
-        order[i].key = which == 1 ? height : which == 2 ? width : piece->area_mm2;
+    int best = -1;
+    int32_t best_x = 0, best_y = 0;
+    double best_top = INFINITY;
+    for (int k = 0; k < count; ++k) {
+        int32_t x, y;
+        if (!grid_find(g, &candidates[k], &x, &y))
+            continue;
+        double top = (y - g->margin) * g->raster.resolution + candidates[k].hi[1];
+        if (top < best_top - 1e-9) /* the first on a tie: 0 degrees first */
+            best = k, best_x = x, best_y = y, best_top = top;
     }
-    qsort(order, (size_t)count, sizeof *order, demand_by_key);
+    *placed = best >= 0;
+    if (best < 0)
+        return 1;
+    const unit *u = &candidates[best];
+    if (!grid_occupy(g, &u->shape, best_x, best_y))
+        return 0;
+    for (int m = 0; m < u->member_count; ++m) {
+        pz_marker_placement placement = u->members[m];
+        placement.offset[0] += (best_x - g->margin) * g->raster.resolution;
+        placement.offset[1] += (best_y - g->margin) * g->raster.resolution;
+        out[(*out_count)++] = placement;
+    }
+    score->length = fmax(score->length, best_top);
+    score->tops += best_top;
+    return 1;
+}
+
+/*
+ * One greedy pass: placements into out (count written). order[i] = demand * 3 + turn: turn 0 takes the
+ * candidate whose top ends lowest, 1 and 2 the first or second half of the candidates only (copy 0 at 0 or
+ * 180 degrees) unless none of those fits.
+ */
+static pz_status nest_pass(grid *g, const pz_pieces *pieces, const demand *demands, const int32_t *order,
+                           int32_t count, pz_marker_placement *out, int32_t *out_count, pass_score *score,
+                           pz_ctx *ctx)
+{
+    grid_reset(g);
+    *out_count = 0;
+    *score = (pass_score){0, 0};
+    for (int32_t i = 0; i < count; ++i) {
+        const demand *d = &demands[order[i] / 3];
+        int turn = order[i] % 3, placed = 0, ok = 1;
+        if (d->copies == 2) {
+            if (turn)
+                ok = place_best(g, d->pairs + 2 * (turn - 1), 2, out, out_count, score, &placed);
+            if (ok && !placed)
+                ok = place_best(g, d->pairs, 4, out, out_count, score, &placed);
+        }
+        for (int c = 0; ok && !placed && c < d->copies; ++c) {
+            int fitted = 0;
+            if (turn)
+                ok = place_best(g, d->singles[c] + (turn - 1), 1, out, out_count, score, &fitted);
+            if (ok && !fitted)
+                ok = place_best(g, d->singles[c], 2, out, out_count, score, &fitted);
+            if (ok && !fitted) {
+                const pz_piece *piece = &pieces->pieces[d->piece];
+                return pz_error(ctx, PZ_ERR_DATA, "marker: piece %s (%.0f mm wide) does not fit on a fabric %.0f mm wide",
+                                piece->name, piece->bbox_max[0] - piece->bbox_min[0], g->raster.width_mm);
+            }
+        }
+        if (!ok)
+            return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
+    }
+    return PZ_OK;
+}
+
+/* ------------------------------------------------------------------ the search over orders */
+
+/* The fixed orders: by area, height, width (decreasing), and by area with large and small pieces alternating. */
+enum { kFixedOrders = 4 };
+
+static void fixed_order(const demand *demands, int32_t count, int which, int32_t *order, int32_t *scratch)
+{
+    int key = which == 3 ? 0 : which;
+    for (int32_t i = 0; i < count; ++i)
+        order[i] = 3 * i;
+    /* Insertion sort, decreasing key, stable (demands are in piece order): few pieces, and deterministic. */
+    for (int32_t i = 1; i < count; ++i)
+        for (int32_t j = i; j > 0 && demands[order[j] / 3].keys[key] > demands[order[j - 1] / 3].keys[key]; --j) {
+            int32_t t = order[j];
+            order[j] = order[j - 1], order[j - 1] = t;
+        }
     if (which != 3)
         return;
     for (int32_t i = 0, large = 0, small = count - 1; i < count; ++i)
@@ -401,88 +680,100 @@ static void order_pieces(const pz_pieces *pieces, int which, demand *order, int3
     memcpy(order, scratch, (size_t)count * sizeof *order);
 }
 
-/* Cell size: fine enough that the rasterization wastes little, coarse enough to stay fast. */
-static double nest_resolution(double width_mm)
+/* xorshift64*: a fixed sequence, so the search is deterministic. */
+static uint64_t next_random(uint64_t *state)
 {
-    double resolution = width_mm / 600.0;
-    return resolution < 1.0 ? 1.0 : resolution;
+    *state ^= *state >> 12;
+    *state ^= *state << 25;
+    *state ^= *state >> 27;
+    return *state * 2685821657736338717ull;
 }
 
-/* A candidate unit of piece `index` in one rotation: the mirrored pair when `pair`, else copy `copy`. */
-static int unit_build(const nest *nest, const pz_piece *piece, int32_t index, int pair, int copy, int rotation,
-                      unit *out)
+/* A neighbour of `order`: one piece's turn changed, two pieces swapped, or one moved to another place. */
+static void perturb(int32_t *order, int32_t count, uint64_t *state)
 {
-    if (!pair)
-        return unit_single(nest, piece, index, copy, rotation, out);
-    unit left = {0}, right = {0};
-    int ok = unit_single(nest, piece, index, 0, rotation, &left) &&
-             unit_single(nest, piece, index, 1, rotation, &right) && unit_pair(nest, &left, &right, out);
-    unit_clear(&left);
-    unit_clear(&right);
-    return ok;
+    int32_t i = (int32_t)(next_random(state) % (uint64_t)count);
+    int32_t j = (int32_t)(next_random(state) % (uint64_t)(count - 1));
+    j += j >= i;
+    uint64_t move = next_random(state) % 3;
+    if (move == 0) {
+        order[i] = order[i] / 3 * 3 + (order[i] % 3 + 1 + (int32_t)(next_random(state) % 2)) % 3;
+        return;
+    }
+    if (move == 1) {
+        int32_t t = order[i];
+        order[i] = order[j], order[j] = t;
+        return;
+    }
+    int32_t moved = order[i];
+    if (i < j)
+        memmove(order + i, order + i + 1, (size_t)(j - i) * sizeof *order);
+    else
+        memmove(order + j + 1, order + j, (size_t)(i - j) * sizeof *order);
+    order[j] = moved;
 }
 
-/* Places the unit (pair or copy) in its better rotation; *placed = 0 when it fits nowhere across the fabric. */
-static pz_status place_unit(nest *nest, const pz_pieces *pieces, int32_t index, int pair, int copy,
-                            pz_marker *marker, int *placed, pz_ctx *ctx)
+typedef struct search {
+    grid grid;
+    const pz_pieces *pieces;
+    const demand *demands;
+    int32_t count;              /* demands */
+    int32_t *order, *trial_order, *scratch;
+    pz_marker_placement *trial; /* a pass's placements */
+    pz_marker *best;            /* the best pass so far (placements, placement_count) */
+    pass_score best_score;
+    int32_t passes;
+} search;
+
+/* Runs one pass over `order`; keeps it in s->best when it beats the best. *score: the pass's. */
+static pz_status search_try(search *s, const int32_t *order, pass_score *score, pz_ctx *ctx)
 {
-    const pz_piece *piece = &pieces->pieces[index];
-    unit best = {0};
-    int32_t best_x = 0, best_y = 0;
-    double best_top = INFINITY;
-    for (int rotation = 0; rotation <= 180; rotation += 180) {
-        unit candidate = {0};
-        int32_t x = 0, y = 0;
-        if (!unit_build(nest, piece, index, pair, copy, rotation, &candidate)) {
-            unit_clear(&candidate);
-            unit_clear(&best);
-            return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
-        }
-        /* The lower top wins: 0 degrees on a tie. */
-        double top = INFINITY;
-        if (nest_find(nest, &candidate, &x, &y))
-            top = (y - nest->margin) * nest->resolution + candidate.hi[1];
-        if (top < best_top - 1e-9) {
-            unit_clear(&best);
-            best = candidate, best_x = x, best_y = y, best_top = top;
-        } else {
-            unit_clear(&candidate);
-        }
+    int32_t placed = 0;
+    pz_status status = nest_pass(&s->grid, s->pieces, s->demands, order, s->count, s->trial, &placed, score, ctx);
+    ++s->passes;
+    if (status == PZ_OK && (s->passes == 1 || score_better(*score, s->best_score))) {
+        s->best_score = *score;
+        s->best->placement_count = placed;
+        memcpy(s->best->placements, s->trial, (size_t)placed * sizeof *s->trial);
     }
-    *placed = isfinite(best_top);
-    if (!*placed)
-        return PZ_OK;
-    if (!nest_occupy(nest, &best.shape, best_x, best_y)) {
-        unit_clear(&best);
-        return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
-    }
-    for (int m = 0; m < best.member_count; ++m) {
-        pz_marker_placement placement = best.members[m];
-        placement.offset[0] += (best_x - nest->margin) * nest->resolution;
-        placement.offset[1] += (best_y - nest->margin) * nest->resolution;
-        marker->placements[marker->placement_count++] = placement;
-    }
-    unit_clear(&best);
-    return PZ_OK;
+    return status;
 }
 
-/* Every copy of one piece: a Cut-2 piece as a pair, or its copies one by one when the pair is too wide. */
-static pz_status place_piece(nest *nest, const pz_pieces *pieces, int32_t index, pz_marker *marker, pz_ctx *ctx)
+/* The fixed orders, then a local search from the best of them: a neighbour replaces the current order when it is
+ * no worse (so the search walks along plateaus of equal length). The first order always runs; every other pass
+ * only while the work budget lasts, so a marker of many pieces on a long fabric (where one pass costs the most)
+ * gets fewer passes. */
+static pz_status search_run(search *s, pz_ctx *ctx)
 {
-    const pz_piece *piece = &pieces->pieces[index];
-    int copies = piece->cut_quantity >= 2 ? 2 : 1, placed = 0;
     pz_status status = PZ_OK;
-    if (copies == 2 && ((status = place_unit(nest, pieces, index, 1, 0, marker, &placed, ctx)) != PZ_OK || placed))
-        return status;
-    for (int copy = 0; copy < copies; ++copy) {
-        if ((status = place_unit(nest, pieces, index, 0, copy, marker, &placed, ctx)) != PZ_OK)
-            return status;
-        if (!placed)
-            return pz_error(ctx, PZ_ERR_DATA, "marker: piece %s (%.0f mm wide) does not fit on a fabric %.0f mm wide",
-                            piece->name, piece->bbox_max[0] - piece->bbox_min[0], nest->width_mm);
+    pass_score current = {INFINITY, INFINITY}, score;
+    for (int which = 0; which < kFixedOrders && (which == 0 || s->grid.work < SEARCH_WORK) && status == PZ_OK;
+         ++which) {
+        fixed_order(s->demands, s->count, which, s->trial_order, s->scratch);
+        status = search_try(s, s->trial_order, &score, ctx);
+        if (status == PZ_OK && score_better(score, current)) {
+            current = score;
+            memcpy(s->order, s->trial_order, (size_t)s->count * sizeof *s->order);
+        }
     }
-    return PZ_OK;
+    uint64_t state = 0x9e3779b97f4a7c15ull;
+    int32_t since_best = 0;
+    while (s->grid.work < SEARCH_WORK && s->passes < SEARCH_MAX_PASSES && since_best < SEARCH_STALL &&
+           s->count > 1 && status == PZ_OK) {
+        memcpy(s->trial_order, s->order, (size_t)s->count * sizeof *s->order);
+        perturb(s->trial_order, s->count, &state);
+        pass_score best_before = s->best_score;
+        status = search_try(s, s->trial_order, &score, ctx);
+        since_best = score_better(s->best_score, best_before) ? 0 : since_best + 1;
+        if (status == PZ_OK && !score_better(current, score)) {
+            current = score;
+            memcpy(s->order, s->trial_order, (size_t)s->count * sizeof *s->order);
+        }
+    }
+    return status;
 }
+
+/* ------------------------------------------------------------------ building */
 
 /* Used length: the highest point of any placed cut line. */
 static double marker_length(const pz_pieces *pieces, const pz_marker *marker)
@@ -516,24 +807,29 @@ static pz_status check_pieces(const pz_pieces *pieces, double width_mm, pz_ctx *
     return PZ_OK;
 }
 
-/* One greedy pass over the pieces in `order`: placements into marker (count reset). */
-static pz_status nest_run(const pz_pieces *pieces, const demand *order, int32_t count, double width_mm,
-                          double gap_mm, pz_marker *marker, pz_ctx *ctx)
+/* The demands of every drawn piece (mirrored == 0, a cut line to place); *count written. */
+static pz_status build_demands(const raster *raster, const pz_pieces *pieces, demand *demands, int32_t *count,
+                               pz_ctx *ctx)
 {
-    nest nest = {0};
-    nest.resolution = nest_resolution(width_mm);
-    nest.reach = gap_mm / 2.0 + nest.resolution * 0.5 * sqrt(2.0) + 1e-9;
-    nest.width_mm = width_mm;
-    nest.margin = (int32_t)ceil(nest.reach / nest.resolution) + 1;
-    nest.columns = (int32_t)ceil(width_mm / nest.resolution) + 2 * nest.margin + 3;
-    marker->placement_count = 0;
-    pz_status status = nest_grow(&nest, 1) ? PZ_OK : pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
-    for (int32_t i = 0; i < count && status == PZ_OK; ++i)
-        status = place_piece(&nest, pieces, order[i].piece, marker, ctx);
-    free(nest.occupied);
-    free(nest.free_run);
-    free(nest.longest_run);
-    return status;
+    *count = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p) {
+        const pz_piece *piece = &pieces->pieces[p];
+        if (piece->mirrored || piece->cut_count < 3)
+            continue;
+        if (!demand_build(raster, pieces, p, &demands[(*count)++]))
+            return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
+    }
+    return PZ_OK;
+}
+
+static grid grid_make(double width_mm, double gap_mm)
+{
+    grid g = {{0, 0, width_mm}, 0, 0, 0, 0, NULL, NULL, NULL, NULL, 0};
+    g.raster.resolution = fmax(fmax(1.0, width_mm / CELLS_ACROSS), (width_mm + gap_mm + 8.0) / (MAX_COLUMNS - 32));
+    g.raster.reach = gap_mm / 2.0 + g.raster.resolution * 0.5 * sqrt(2.0) + 1e-9;
+    g.margin = (int32_t)ceil(g.raster.reach / g.raster.resolution) + 1;
+    g.columns = (int32_t)ceil(width_mm / g.raster.resolution) + 2 * g.margin + 3;
+    return g;
 }
 
 pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *options, pz_marker **out, pz_ctx *ctx)
@@ -542,57 +838,47 @@ pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *opti
     double width_mm = options->fabric_width_mm > 0 ? options->fabric_width_mm : 1500.0;
     double gap_mm = options->gap_mm >= 0 ? options->gap_mm : 0.0;
     double start = pz_seconds();
-    pz_marker *marker = calloc(1, sizeof *marker), trial = {0};
-    int32_t capacity = 0;
-    for (int32_t p = 0; p < pieces->piece_count; ++p)
-        if (!pieces->pieces[p].mirrored)
-            capacity += pieces->pieces[p].cut_quantity >= 2 ? 2 : 1;
-    demand *order = malloc(((size_t)pieces->piece_count + 1) * 2 * sizeof *order);
-    trial.placements = malloc(((size_t)capacity + 1) * sizeof *trial.placements);
-    if (!marker || !order || !trial.placements ||
-        !(marker->placements = malloc(((size_t)capacity + 1) * sizeof *marker->placements))) {
-        free(order);
-        free(trial.placements);
-        pz_marker_free(&marker);
-        return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
-    }
-    marker->fabric_width_mm = width_mm;
     pz_status status = check_pieces(pieces, width_mm, ctx);
+    if (status != PZ_OK)
+        return status;
+    size_t n = (size_t)pieces->piece_count + 1;
+    search s = {grid_make(width_mm, gap_mm), pieces, NULL, 0, NULL, NULL, NULL, NULL, NULL, {0, 0}, 0};
+    demand *demands = calloc(n, sizeof *demands);
+    s.order = malloc(3 * n * sizeof(int32_t));
+    s.trial = malloc(2 * n * sizeof *s.trial);
+    s.best = calloc(1, sizeof *s.best);
+    if (s.best)
+        s.best->placements = malloc(2 * n * sizeof *s.best->placements);
+    if (!demands || !s.order || !s.trial || !s.best || !s.best->placements || !grid_grow(&s.grid, 1))
+        status = pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
+    if (status == PZ_OK) {
+        s.trial_order = s.order + n, s.scratch = s.order + 2 * n;
+        s.demands = demands;
+        status = build_demands(&s.grid.raster, pieces, demands, &s.count, ctx);
+    }
+    if (status == PZ_OK)
+        status = search_run(&s, ctx);
+    pz_marker *marker = s.best;
+    if (status == PZ_OK) {
+        marker->fabric_width_mm = width_mm;
+        marker->length_mm = marker->placement_count ? marker_length(pieces, marker) : 0.0;
+        double area = 0.0;
+        for (int32_t p = 0; p < marker->placement_count; ++p)
+            area += pieces->pieces[marker->placements[p].piece].area_mm2;
+        marker->efficiency = marker->length_mm > 0 ? area / (width_mm * marker->length_mm) : 0.0;
+        marker->passes = s.passes;
+        marker->ms = (pz_seconds() - start) * 1000.0;
+    }
+    for (int32_t i = 0; demands && i < pieces->piece_count; ++i)
+        demand_clear(&demands[i]);
+    free(demands);
+    free(s.order);
+    free(s.trial);
+    grid_free(&s.grid);
     if (status != PZ_OK) {
-        free(order);
-        free(trial.placements);
         pz_marker_free(&marker);
         return status;
     }
-    int32_t order_count = 0;
-    for (int32_t p = 0; p < pieces->piece_count; ++p)
-        if (!pieces->pieces[p].mirrored && pieces->pieces[p].cut_count >= 3)
-            order[order_count++] = (demand){p, 0.0};
-    /* Greedy passes in several orders; the shortest marker wins (the first on a tie: deterministic). */
-    marker->length_mm = INFINITY;
-    for (int which = 0; which < kOrderCount && status == PZ_OK; ++which) {
-        order_pieces(pieces, which, order, order_count, order + pieces->piece_count + 1);
-        status = nest_run(pieces, order, order_count, width_mm, gap_mm, &trial, ctx);
-        double length = status == PZ_OK ? marker_length(pieces, &trial) : INFINITY;
-        if (length < marker->length_mm) {
-            marker->length_mm = length;
-            marker->placement_count = trial.placement_count;
-            memcpy(marker->placements, trial.placements, (size_t)trial.placement_count * sizeof *trial.placements);
-        }
-    }
-    free(trial.placements);
-    free(order);
-    if (status != PZ_OK) {
-        pz_marker_free(&marker);
-        return status;
-    }
-    double area = 0.0;
-    for (int32_t p = 0; p < marker->placement_count; ++p)
-        area += pieces->pieces[marker->placements[p].piece].area_mm2;
-    if (marker->placement_count == 0)
-        marker->length_mm = 0.0;
-    marker->efficiency = marker->length_mm > 0 ? area / (width_mm * marker->length_mm) : 0.0;
-    marker->ms = (pz_seconds() - start) * 1000.0;
     *out = marker;
     return PZ_OK;
 }
@@ -615,8 +901,10 @@ cJSON *pz_marker_report_json(const pz_marker *marker)
              cJSON_AddNumberToObject(json, "efficiency", round(marker->efficiency * 10000) / 10000) &&
              cJSON_AddNumberToObject(json, "fabric_width_mm", marker->fabric_width_mm) &&
              cJSON_AddNumberToObject(json, "pieces", marker->placement_count) &&
+             cJSON_AddNumberToObject(json, "passes", marker->passes) &&
              cJSON_AddNumberToObject(json, "ms", round(marker->ms * 10) / 10) &&
-             cJSON_AddStringToObject(json, "method", "raster bottom-left fill, rotations 0/180");
+             cJSON_AddStringToObject(json, "method",
+                                     "raster bottom-left fill over true shapes, order search, rotations 0/180");
     if (!ok)
         cJSON_Delete(json);
     return ok ? json : NULL;
@@ -688,5 +976,5 @@ pz_status pz_export_write_marker_svg(FILE *file, const pz_export_inputs *inputs,
             return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
     }
     fputs("</svg>\n", file);
-    return ferror(file) ? pz_error(ctx, PZ_ERR_CREATE, "%s: write error", name) : PZ_OK;
+    return pz_export_stream_status(file, 0, name, ctx);
 }

@@ -30,6 +30,7 @@
 
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -58,6 +59,47 @@ void pz_notch_label(int32_t seam, int32_t index, char label[16])
     while (length > 0)
         *out++ = letters[--length];
     snprintf(out, (size_t)(16 - (out - label)), "%d", (int)(index + 1));
+}
+
+/* ---------------------------------------------------------------- drawn labels */
+
+typedef struct notch_at {
+    double x, y;
+    int32_t index;
+} notch_at;
+
+static int compare_notch_at(const void *a, const void *b)
+{
+    const notch_at *p = a, *q = b;
+    if (p->x != q->x)
+        return (p->x > q->x) - (p->x < q->x);
+    if (p->y != q->y)
+        return (p->y > q->y) - (p->y < q->y);
+    return (p->index > q->index) - (p->index < q->index);
+}
+
+int pz_piece_notch_labels(const pz_piece *piece, char (*labels)[PZ_NOTCH_LABELS_MAX])
+{
+    notch_at *order = malloc(((size_t)piece->notch_count + 1) * sizeof *order);
+    if (!order)
+        return 0;
+    for (int32_t i = 0; i < piece->notch_count; ++i) {
+        order[i] = (notch_at){piece->notches[i].position[0], piece->notches[i].position[1], i};
+        labels[i][0] = '\0';
+    }
+    qsort(order, (size_t)piece->notch_count, sizeof *order, compare_notch_at);
+    for (int32_t first = 0, next; first < piece->notch_count; first = next) {
+        char *label = labels[order[first].index];
+        for (next = first; next < piece->notch_count && order[next].x == order[first].x &&
+                           order[next].y == order[first].y;
+             ++next) {
+            size_t used = strlen(label);
+            snprintf(label + used, PZ_NOTCH_LABELS_MAX - used, "%s%s", used ? " " : "",
+                     piece->notches[order[next].index].label);
+        }
+    }
+    free(order);
+    return 1;
 }
 
 /* ---------------------------------------------------------------- darts: mouths */
@@ -196,8 +238,11 @@ static int seam_notch(const pz_pieces *pieces, const pz_outline_map *map, const 
     if (piece_id < 0)
         return 0;
     const pz_piece *piece = &pieces->pieces[piece_id];
-    notch->position[0] = uv[2 * a] + t * (uv[2 * b] - uv[2 * a]);
-    notch->position[1] = uv[2 * a + 1] + t * (uv[2 * b + 1] - uv[2 * a + 1]);
+    /* At a vertex, exactly the vertex (a + 1 (b - a) need not be b): the notch of the next seam starting there
+     * is then at the very same point, and the writers draw the two as one. */
+    int32_t at_vertex = t <= 1e-12 ? a : t >= 1 - 1e-12 ? b : -1;
+    for (int d = 0; d < 2; ++d)
+        notch->position[d] = at_vertex >= 0 ? uv[2 * at_vertex + d] : uv[2 * a + d] + t * (uv[2 * b + d] - uv[2 * a + d]);
     notch->arc_mm = s;
     double allowance;
     int32_t edge = pz_outline_edge(pieces, map, a, b);

@@ -40,6 +40,17 @@ pz_status pz_pieces_add_notches(pz_pieces *pieces, const pz_pattern *pattern, co
 /* The sew edge joining outline vertices a and b (consecutive on one piece's outline), or -1. */
 int32_t pz_outline_edge(const pz_pieces *pieces, const pz_outline_map *map, int32_t a, int32_t b);
 
+/* Room for a drawn notch label: the labels of the notches at one place, "X5 I1". */
+#define PZ_NOTCH_LABELS_MAX 48
+
+/*
+ * The notches as drawn: notches at the same place (the ends of two seams at a
+ * corner, made from one sew vertex) are drawn once, with their labels joined
+ * ("X5 I1") on the first of them; the others get "" and are not drawn.
+ * labels: piece->notch_count. 0 when out of memory.
+ */
+int pz_piece_notch_labels(const pz_piece *piece, char (*labels)[PZ_NOTCH_LABELS_MAX]);
+
 /* Outward unit normal of sew edge i (sew[i] -> sew[i+1]) of a piece. */
 void pz_piece_edge_normal(const pz_piece *piece, int32_t i, double normal[2]);
 

@@ -11,7 +11,8 @@
  * 25.4 pt.
  *
  * Each piece: cut line (solid, 0.5 mm), sew line (dashed, 0.3 mm), notches
- * (cut from the cut line inward by their depth, with their labels), internal
+ * (cut from the cut line inward by their depth, with their labels; notches
+ * at one place drawn once, labels joined: "X5 I1"), internal
  * lines (darts), the grain arrow, and its name, cut count ("Cut 1" / "Cut 2
  * mirrored"), garment, size and extent as text.
  *
@@ -33,11 +34,14 @@
  */
 #define _POSIX_C_SOURCE 200809L /* gmtime_r */
 #include "export/export.h"
+#include "export/notches.h"
+#include "export/stream_status.h"
 #include "export/xml_text.h"
 
 #include <cairo-pdf.h>
 #include <cairo.h>
 #include <ctype.h>
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -50,7 +54,10 @@
  * life of the process (only FcFini frees it, and a library must not call
  * that): LeakSanitizer reports it at exit of every program that wrote a PDF.
  * In sanitizer builds only, this file names that leak through LSan's
- * documented hook, so the programs linking it (the CLI, the tests) stay clean.
+ * documented hook, so the programs linking it (the CLI, the tests) stay clean,
+ * and asks LSan not to list the suppressions it used at exit (the CLI's
+ * stderr must stay one line on failure and empty with --quiet;
+ * LSAN_OPTIONS still overrides).
  */
 #if defined(__SANITIZE_ADDRESS__)
 #define PZ_PDF_LSAN_HOOK 1
@@ -64,6 +71,11 @@ const char *__lsan_default_suppressions(void);
 const char *__lsan_default_suppressions(void)
 {
     return "leak:libfontconfig.so\n";
+}
+const char *__lsan_default_options(void);
+const char *__lsan_default_options(void)
+{
+    return "print_suppressions=0";
 }
 #endif
 
@@ -224,17 +236,25 @@ static void draw_piece(cairo_t *cr, const pz_pieces *pieces, const pz_piece *pie
         path_polyline(cr, piece->lines[l].points, piece->lines[l].point_count, offset, 0);
         cairo_stroke(cr);
     }
+    /* Notches at one place (two seams' ends at a corner) once, their labels joined; each on its own when out of
+     * memory for that. */
+    char(*labels)[PZ_NOTCH_LABELS_MAX] = malloc(((size_t)piece->notch_count + 1) * sizeof *labels);
+    int joined = labels && pz_piece_notch_labels(piece, labels);
     for (int32_t n = 0; n < piece->notch_count; ++n) {
         /* A notch is a cut from the cut line inward, depth_mm long (pz_notch). */
         const pz_notch *notch = &piece->notches[n];
+        const char *label = joined ? labels[n] : notch->label;
+        if (joined && !label[0])
+            continue;
         double x = notch->cut_point[0] + offset[0], y = notch->cut_point[1] + offset[1];
         cairo_move_to(cr, x, y);
         cairo_line_to(cr, x - notch->depth_mm * notch->direction[0], y - notch->depth_mm * notch->direction[1]);
         cairo_stroke(cr);
-        if (notch->label[0])
+        if (label[0])
             draw_text(cr, notch->position[0] + offset[0] - 6 * notch->direction[0] - 2,
-                      notch->position[1] + offset[1] - 6 * notch->direction[1] - 1, 3.0, notch->label);
+                      notch->position[1] + offset[1] - 6 * notch->direction[1] - 1, 3.0, label);
     }
+    free(labels);
     double tail[2] = {piece->grain[0][0] + offset[0], piece->grain[0][1] + offset[1]};
     double head[2] = {piece->grain[1][0] + offset[0], piece->grain[1][1] + offset[1]};
     cairo_set_line_width(cr, 0.5);
@@ -293,13 +313,24 @@ static void draw_sheet(cairo_t *cr, const pz_export_inputs *inputs, const sheet 
 
 /* ------------------------------------------------------------------ streams */
 
+/* The PDF's stream: cairo calls write_stream; the first failure's errno is kept for the message. */
+typedef struct pdf_stream {
+    FILE *file;
+    int error;
+} pdf_stream;
+
 static cairo_status_t write_stream(void *closure, const unsigned char *data, unsigned int length)
 {
-    return fwrite(data, 1, length, (FILE *)closure) == length ? CAIRO_STATUS_SUCCESS : CAIRO_STATUS_WRITE_ERROR;
+    pdf_stream *stream = closure;
+    if (fwrite(data, 1, length, stream->file) == length)
+        return CAIRO_STATUS_SUCCESS;
+    if (!stream->error)
+        stream->error = errno ? errno : EIO;
+    return CAIRO_STATUS_WRITE_ERROR;
 }
 
 /* Finishes the surface and turns cairo's and the stream's state into a status. */
-static pz_status finish(cairo_surface_t *surface, cairo_t *cr, FILE *file, const char *name, pz_ctx *ctx)
+static pz_status finish(cairo_surface_t *surface, cairo_t *cr, pdf_stream *stream, const char *name, pz_ctx *ctx)
 {
     cairo_status_t drawing = cr ? cairo_status(cr) : CAIRO_STATUS_SUCCESS;
     if (cr)
@@ -309,7 +340,9 @@ static pz_status finish(cairo_surface_t *surface, cairo_t *cr, FILE *file, const
     cairo_surface_destroy(surface);
     if (drawing == CAIRO_STATUS_NO_MEMORY || status == CAIRO_STATUS_NO_MEMORY)
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
-    if (drawing != CAIRO_STATUS_SUCCESS || status != CAIRO_STATUS_SUCCESS || ferror(file))
+    if (stream->error || ferror(stream->file))
+        return pz_export_stream_status(stream->file, stream->error, name, ctx);
+    if (drawing != CAIRO_STATUS_SUCCESS || status != CAIRO_STATUS_SUCCESS)
         return pz_error(ctx, PZ_ERR_CREATE, "%s: cannot write the PDF (%s)", name,
                         cairo_status_to_string(status != CAIRO_STATUS_SUCCESS ? status : drawing));
     return PZ_OK;
@@ -342,15 +375,16 @@ pz_status pz_export_write_pdf(FILE *file, const pz_export_inputs *inputs, const 
     pz_status status = sheet_build(inputs->pieces, &sheet, ctx);
     if (status != PZ_OK)
         return status;
+    pdf_stream stream = {file, 0};
     cairo_surface_t *surface =
-        cairo_pdf_surface_create_for_stream(write_stream, file, sheet.width * PT_PER_MM, sheet.height * PT_PER_MM);
+        cairo_pdf_surface_create_for_stream(write_stream, &stream, sheet.width * PT_PER_MM, sheet.height * PT_PER_MM);
     set_metadata(surface, inputs->pieces, "pattern, 1:1");
     cairo_t *cr = cairo_create(surface);
     sheet_space(cr, sheet.height);
     draw_sheet(cr, inputs, &sheet, NULL, NULL);
     cairo_show_page(cr);
     free(sheet.items);
-    return finish(surface, cr, file, name, ctx);
+    return finish(surface, cr, &stream, name, ctx);
 }
 
 /* ------------------------------------------------------------------ tiles */
@@ -615,7 +649,8 @@ pz_status pz_export_write_pdf_tiled(FILE *file, const pz_export_inputs *inputs, 
         free(sheet.items);
         return status;
     }
-    cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(write_stream, file, tiling.paper[0] * PT_PER_MM,
+    pdf_stream stream = {file, 0};
+    cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(write_stream, &stream, tiling.paper[0] * PT_PER_MM,
                                                                    tiling.paper[1] * PT_PER_MM);
     set_metadata(surface, inputs->pieces, "tiled pattern");
     cairo_t *cr = cairo_create(surface);
@@ -632,5 +667,5 @@ pz_status pz_export_write_pdf_tiled(FILE *file, const pz_export_inputs *inputs, 
         }
     free(tiling.inked);
     free(sheet.items);
-    return finish(surface, cr, file, name, ctx);
+    return finish(surface, cr, &stream, name, ctx);
 }

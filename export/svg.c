@@ -12,12 +12,15 @@
  * class "cut" (solid), "sew" (dashed), "notch" (from the cut line inward),
  * "dart" (legs, fold line, tip mark), "grainline" (with its arrowhead), and
  * texts: name, cut count ("Cut 1", "Cut 2 mirrored"), garment, size, the
- * piece's extent (cut-line box, mm), notch labels. The second piece of a
+ * piece's extent (cut-line box, mm), notch labels (notches at one place,
+ * such as the ends of two seams at a corner, drawn once: "X5 I1"). The second piece of a
  * mirrored pair is not drawn (its partner says "Cut 2 mirrored").
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/notches.h"
+#include "export/stream_status.h"
 #include "export/xml_text.h"
 
 #include <math.h>
@@ -55,24 +58,35 @@ static void text(const sheet *s, const char *class_name, const double p[2], doub
     fputs("</text>\n", s->file);
 }
 
-static void write_notches(const sheet *s, const pz_piece *piece)
+/* Notches from the cut line inward, drawn once per place with their labels joined ("X5 I1"). 0: out of memory. */
+static int write_notches(const sheet *s, const pz_piece *piece)
 {
     if (piece->notch_count == 0)
-        return;
+        return 1;
+    char(*labels)[PZ_NOTCH_LABELS_MAX] = malloc((size_t)piece->notch_count * sizeof *labels);
+    if (!labels || !pz_piece_notch_labels(piece, labels)) {
+        free(labels);
+        return 0;
+    }
     fputs("<path class=\"notch\" fill=\"none\" stroke=\"#000000\" stroke-width=\"0.5\" d=\"", s->file);
-    for (int32_t i = 0; i < piece->notch_count; ++i) {
+    for (int32_t i = 0, drawn = 0; i < piece->notch_count; ++i) {
         const pz_notch *n = &piece->notches[i];
+        if (!labels[i][0])
+            continue;
         double inner[2] = {n->cut_point[0] - n->depth_mm * n->direction[0],
                            n->cut_point[1] - n->depth_mm * n->direction[1]};
-        point(s, i == 0 ? "M" : " M", n->cut_point);
+        point(s, drawn++ == 0 ? "M" : " M", n->cut_point);
         point(s, " L", inner);
     }
     fputs("\"/>\n", s->file);
     for (int32_t i = 0; i < piece->notch_count; ++i) {
         const pz_notch *n = &piece->notches[i];
         double at[2] = {n->position[0] - 4 * n->direction[0], n->position[1] - 4 * n->direction[1] - 1};
-        text(s, "notch-label", at, 3.0, n->label);
+        if (labels[i][0])
+            text(s, "notch-label", at, 3.0, labels[i]);
     }
+    free(labels);
+    return 1;
 }
 
 static void write_grainline(const sheet *s, const pz_piece *piece)
@@ -108,7 +122,8 @@ static void write_labels(const sheet *s, const pz_piece *piece, const pz_pieces 
     text(s, "dimensions", at, 0.7 * size, line);
 }
 
-static void write_piece(sheet *s, const pz_piece *piece, const pz_pieces *pieces, const double offset[2])
+/* One piece's group. 0 when out of memory. */
+static int write_piece(sheet *s, const pz_piece *piece, const pz_pieces *pieces, const double offset[2])
 {
     s->offset[0] = offset[0];
     s->offset[1] = offset[1];
@@ -120,7 +135,8 @@ static void write_piece(sheet *s, const pz_piece *piece, const pz_pieces *pieces
           s->file);
     polyline(s, piece->sew, piece->sew_count, 1);
     fputs("\"/>\n", s->file);
-    write_notches(s, piece);
+    if (!write_notches(s, piece))
+        return 0;
     if (piece->line_count > 0) {
         fputs("<path class=\"dart\" fill=\"none\" stroke=\"#0050b0\" stroke-width=\"0.4\" d=\"", s->file);
         for (int32_t i = 0; i < piece->line_count; ++i) {
@@ -133,6 +149,7 @@ static void write_piece(sheet *s, const pz_piece *piece, const pz_pieces *pieces
     write_grainline(s, piece);
     write_labels(s, piece, pieces);
     fputs("</g>\n", s->file);
+    return 1;
 }
 
 static void write_band(const sheet *s, const pz_pieces *pieces)
@@ -167,10 +184,13 @@ pz_status pz_export_write_svg(FILE *file, const pz_export_inputs *inputs, const 
             "viewBox=\"0 0 %.3f %.3f\" font-family=\"sans-serif\">\n",
             size[0], size[1], size[0], size[1]);
     write_band(&s, pieces);
-    for (int32_t p = 0; p < pieces->piece_count; ++p)
+    int ok = 1;
+    for (int32_t p = 0; p < pieces->piece_count && ok; ++p)
         if (!pieces->pieces[p].mirrored)
-            write_piece(&s, &pieces->pieces[p], pieces, &offsets[2 * p]);
+            ok = write_piece(&s, &pieces->pieces[p], pieces, &offsets[2 * p]);
     fputs("</svg>\n", file);
     free(offsets);
-    return PZ_OK;
+    if (!ok)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
+    return pz_export_stream_status(file, 0, name, ctx);
 }

@@ -13,9 +13,10 @@
 
 #include "export/export.h"
 #include "param/param.h"
-#include "test_util.h"
+#include "../test_util.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -26,7 +27,7 @@ typedef struct fixture {
     int32_t *panel_mirror;   /* panel_count, or NULL */
 } fixture;
 
-static void fixture_free(fixture *f)
+static inline void fixture_free(fixture *f)
 {
     pz_pattern_free(&f->pattern);
     pz_mesh_free(&f->garment);
@@ -36,7 +37,7 @@ static void fixture_free(fixture *f)
 }
 
 /* The two horizontal axes (not the garment's vertical) and the centroid. */
-static void fixture_axes(const pz_mesh *mesh, int *first, int *second, double centre[3])
+static inline void fixture_axes(const pz_mesh *mesh, int *first, int *second, double centre[3])
 {
     double up[3];
     pz_mesh_vertical_axis(mesh, up);
@@ -55,7 +56,7 @@ static void fixture_axes(const pz_mesh *mesh, int *first, int *second, double ce
  * first horizontal axis (2 panels), and with `quarters` along the second too
  * (4). The mirror map pairs panels across the first axis' plane.
  */
-static void fixture_split(fixture *f, int quarters, int32_t *face_panel, int32_t *panel_count)
+static inline void fixture_split(fixture *f, int quarters, int32_t *face_panel, int32_t *panel_count)
 {
     int first, second;
     double centre[3];
@@ -76,7 +77,7 @@ static void fixture_split(fixture *f, int quarters, int32_t *face_panel, int32_t
 }
 
 /* Builds the pattern from face_panel (and optional extra cuts) and flattens it (textile or LSCM). */
-static void fixture_flatten(fixture *f, const int32_t *face_panel, const uint8_t *cuts, const char *path,
+static inline void fixture_flatten(fixture *f, const int32_t *face_panel, const uint8_t *cuts, const char *path,
                             int textile)
 {
     pz_ctx ctx = {0};
@@ -92,7 +93,7 @@ static void fixture_flatten(fixture *f, const int32_t *face_panel, const uint8_t
 }
 
 /* A generated garment in halves or quarters, flattened with the textile back-end. */
-static fixture fixture_generated(pz_shape shape, int32_t faces, int quarters)
+static inline fixture fixture_generated(pz_shape shape, int32_t faces, int quarters)
 {
     pz_ctx ctx = {0};
     fixture f = {0};
@@ -106,24 +107,45 @@ static fixture fixture_generated(pz_shape shape, int32_t faces, int quarters)
     return f;
 }
 
-/* A shared garment: its UV panels when use_uv, else two halves; LSCM. 0 when it cannot be built (printed). */
-static int fixture_shared(fixture *f, const char *path, int use_uv)
+/*
+ * Panel ids from the `g panel_K` groups of a garment.obj that panelize wrote
+ * (the same numbers as its pieces), when every face has such a group;
+ * face_panel is left alone otherwise.
+ */
+static inline void fixture_panels_from_groups(const pz_mesh *mesh, int32_t *face_panel)
+{
+    if (!mesh->face_labels || !mesh->label_names)
+        return;
+    for (int32_t l = 0; l < mesh->label_count; ++l) {
+        int id = -1, consumed = 0;
+        if (!mesh->label_names[l] || sscanf(mesh->label_names[l], "panel_%d%n", &id, &consumed) != 1 ||
+            mesh->label_names[l][consumed] != '\0' || id < 0)
+            return;
+    }
+    for (int32_t t = 0; t < mesh->face_count; ++t) {
+        int id = -1;
+        sscanf(mesh->label_names[mesh->face_labels[t]], "panel_%d", &id);
+        face_panel[t] = id;
+    }
+}
+
+/* f->pattern from f->garment's UV islands (use_uv; numbered by the `g panel_K` groups when it has them) or two
+ * halves. 0 when it cannot be built (printed, f freed). */
+static inline int fixture_pattern_of(fixture *f, const char *path, int use_uv)
 {
     pz_ctx ctx = {0};
-    memset(f, 0, sizeof *f);
-    if (pz_mesh_read(path, &f->garment, &ctx) != PZ_OK) {
-        printf("  %s: cannot read: %s\n", path, ctx.error);
-        return 0;
-    }
-    pz_mesh_to_mm(f->garment, PZ_UNITS_AUTO, NULL);
     int32_t *face_panel = malloc((size_t)f->garment->face_count * sizeof(int32_t) + 1), panel_count = 0;
     uint8_t *cuts = NULL;
     REQUIRE(face_panel, "out of memory");
+    pz_status status = PZ_OK;
     if (use_uv)
-        REQUIRE_OK(pz_pattern_panels_from_uv(f->garment, face_panel, &panel_count, &cuts, &ctx), ctx);
+        status = pz_pattern_panels_from_uv(f->garment, face_panel, &panel_count, &cuts, &ctx);
     else
         fixture_split(f, 0, face_panel, &panel_count);
-    pz_status status = pz_pattern_build(f->garment, face_panel, cuts, NULL, path, &f->pattern, &ctx);
+    if (status == PZ_OK && use_uv)
+        fixture_panels_from_groups(f->garment, face_panel);
+    if (status == PZ_OK)
+        status = pz_pattern_build(f->garment, face_panel, cuts, NULL, path, &f->pattern, &ctx);
     free(face_panel);
     free(cuts);
     if (status != PZ_OK) {
@@ -133,6 +155,21 @@ static int fixture_shared(fixture *f, const char *path, int use_uv)
     }
     f->uv = malloc(2 * (size_t)f->pattern->mesh->vertex_count * sizeof(double) + 1);
     REQUIRE(f->uv, "out of memory");
+    return 1;
+}
+
+/* A shared garment: its UV panels when use_uv, else two halves; LSCM. 0 when it cannot be built (printed). */
+static inline int fixture_shared(fixture *f, const char *path, int use_uv)
+{
+    pz_ctx ctx = {0};
+    memset(f, 0, sizeof *f);
+    if (pz_mesh_read(path, &f->garment, &ctx) != PZ_OK) {
+        printf("  %s: cannot read: %s\n", path, ctx.error);
+        return 0;
+    }
+    pz_mesh_to_mm(f->garment, PZ_UNITS_AUTO, NULL);
+    if (!fixture_pattern_of(f, path, use_uv))
+        return 0;
     double up[3];
     pz_mesh_vertical_axis(f->garment, up);
     if (pz_param_lscm_pattern(f->pattern, up, f->uv, &ctx) != PZ_OK) {
@@ -144,6 +181,35 @@ static int fixture_shared(fixture *f, const char *path, int use_uv)
         free(f->panel_mirror);
         f->panel_mirror = NULL;   /* halves of a real scan are rarely mirror images */
     }
+    return 1;
+}
+
+/*
+ * The pattern a `panelize flatten` or `run` wrote as garment.obj: panels from
+ * its vt (the pattern, mm), seams and darts found again by pz_pattern_build
+ * (darts are the slits of the UV layout), uv = each cut-mesh corner's vt (the
+ * cut mesh keeps the garment's face order). No mirror map. 0 when it cannot
+ * be built (printed).
+ */
+static inline int fixture_from_pattern_obj(fixture *f, const char *path)
+{
+    pz_ctx ctx = {0};
+    memset(f, 0, sizeof *f);
+    if (pz_mesh_read(path, &f->garment, &ctx) != PZ_OK || !f->garment->corner_uvs) {
+        printf("  %s: cannot read a pattern: %s\n", path, f->garment ? "no vt" : ctx.error);
+        fixture_free(f);
+        return 0;
+    }
+    pz_mesh_to_mm(f->garment, PZ_UNITS_AUTO, NULL);
+    if (!fixture_pattern_of(f, path, 1))
+        return 0;
+    const pz_mesh *cut = f->pattern->mesh;
+    for (int32_t t = 0; t < cut->face_count; ++t)
+        for (int k = 0; k < 3; ++k) {
+            const double *vt = &f->garment->uvs[2 * (size_t)f->garment->corner_uvs[3 * t + k]];
+            f->uv[2 * (size_t)cut->faces[3 * t + k]] = vt[0];
+            f->uv[2 * (size_t)cut->faces[3 * t + k] + 1] = vt[1];
+        }
     return 1;
 }
 

@@ -38,31 +38,8 @@ if ! PZ_GLB_OUT="$work" "$build_dir/test_glb" >"$work/test_glb.log" 2>&1; then
 fi
 ls "$work"/*.glb >/dev/null 2>&1 || { echo "FAIL: test_glb wrote no GLB"; exit 1; }
 
-# Errors and warnings are listed; any error fails. Infos (e.g. unused data) are only counted.
-cat >"$work/validate.js" <<'JS'
-const fs = require('fs');
-const path = require('path');
-const validator = require(process.argv[2]);
-(async () => {
-  let failed = 0;
-  for (const file of process.argv.slice(3)) {
-    const report = await validator.validateBytes(new Uint8Array(fs.readFileSync(file)), {
-      uri: path.basename(file), maxIssues: 200,
-      externalResourceFunction: (uri) => Promise.reject(new Error('unexpected external resource ' + uri)),
-    });
-    const issues = report.issues;
-    console.log(`${path.basename(file)}: ${issues.numErrors} errors, ${issues.numWarnings} warnings, ` +
-                `${issues.numInfos} infos, ${issues.numHints} hints`);
-    for (const message of issues.messages)
-      if (message.severity <= 1)
-        console.log(`  ${message.severity === 0 ? 'error' : 'warning'} ${message.code} ${message.pointer || ''}: ` +
-                    message.message);
-    failed += issues.numErrors > 0;
-  }
-  process.exit(failed ? 1 : 0);
-})().catch((error) => { console.log('validator failed: ' + error); process.exit(1); });
-JS
-if node "$work/validate.js" "$validator" "$work"/*.glb; then
+# Errors and warnings are listed; any error fails (tests/export/validate_glb.js).
+if node "$source_dir/tests/export/validate_glb.js" "$validator" "$work"/*.glb; then
     echo "all garment GLBs valid"
     exit 0
 fi

@@ -5,9 +5,11 @@
  *  - both render (pdftoppm exits 0);
  *  - pattern.pdf is one page; the tiled PDF's pages are A4 or Letter as
  *    asked;
- *  - the 10 cm scale box measures 100 mm (within 0.2) in the PDF's own
- *    units, on the sheet and on the first tile (rendered at 254 dpi, 0.1 mm
- *    per pixel, the spacing of its edges measured);
+ *  - the 10 cm scale box measures 100 mm, on the sheet and on the first
+ *    tile: rendered at 254 dpi (0.1 mm per pixel, the spacing of its edges
+ *    measured, within 0.2 mm), and in the PDF's own units (a 283.465 pt
+ *    rectangle in a content stream drawn without scaling, within 0.01 mm:
+ *    tests/export/pdf_scale_box.py);
  *  - the tiled PDF has the cover plus one page per inked tile: the cover's
  *    "K of R x C tiles printed" matches pdfinfo, some tiles were dropped,
  *    every tile with ink on the rendered 1:1 sheet has its page,
@@ -239,7 +241,7 @@ static void check_pdfs(const pz_pieces *pieces, const char *paper, const char *t
     pz_export_options_default(&options);
     options.paper = paper;
     pz_export_inputs inputs = {.pieces = pieces, .options = &options};
-    char sheet_path[300], tiled_path[300], command[800];
+    char sheet_path[300], tiled_path[300], command[1600];
     snprintf(sheet_path, sizeof sheet_path, "%s/%s-pattern.pdf", dir, tag);
     snprintf(tiled_path, sizeof tiled_path, "%s/%s-pattern-tiled.pdf", dir, tag);
     write_pdf(pz_export_write_pdf, &inputs, sheet_path);
@@ -253,6 +255,15 @@ static void check_pdfs(const pz_pieces *pieces, const char *paper, const char *t
     CHECK(fabs(size[0] - (letter ? 612 : 595.28)) < 0.5 && fabs(size[1] - (letter ? 792 : 841.89)) < 0.5,
           "%s: page size %g x %g", tiled_path, size[0], size[1]);
     CHECK(has_scale_box(tiled_path, 2, 20, 20), "%s: no 100 mm scale box on the first tile", tiled_path);
+    /* And in the PDF's own units: a 283.465 pt rectangle drawn without scaling (pdf_scale_box.py). */
+    const char *source = getenv("PZ_SOURCE_DIR");
+    if (source && have("/usr/bin/python3")) {
+        for (int k = 0; k < 2; ++k) {
+            snprintf(command, sizeof command, "/usr/bin/python3 '%s/tests/export/pdf_scale_box.py' '%s' >/dev/null",
+                     source, k ? tiled_path : sheet_path);
+            CHECK(system(command) == 0, "%s: no 100 x 100 mm rectangle in the PDF's units", k ? tiled_path : sheet_path);
+        }
+    }
 
     snprintf(command, sizeof command, "pdftoppm -r 8 '%s' %s/render && pdftoppm -r 8 '%s' %s/render && rm -f %s/render*",
              sheet_path, dir, tiled_path, dir, dir);

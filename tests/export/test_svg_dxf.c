@@ -13,8 +13,10 @@
  *    piece is a block inserted once whose closed layer-1 polyline has our cut
  *    vertex count and perimeter, with the sew line, notches, grain line,
  *    dart lines on their layers. Strict: no TABLES section, 7-bit ASCII only;
- *    normal: non-ASCII text as \U+XXXX.
- * Readers that are not installed skip their part (printed), never fail it.
+ *    normal: non-ASCII text as \U+XXXX; pieces of the same name get distinct
+ *    block names.
+ * Readers that are not installed skip their part (printed), which fails the
+ * test when CI=true (tests/export/readers.h).
  * The skirt of ../shared/data (darts) is written too when present.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -22,25 +24,10 @@
 #define _POSIX_C_SOURCE 200809L
 #include "export/export.h"
 #include "export_fixtures.h"
-#include "test_files.h"
-
-#include <sys/wait.h>
+#include "piece_checks.h"
+#include "readers.h"
 
 static pz_ctx ctx;
-
-static int has_program(const char *command)
-{
-    char line[512];
-    snprintf(line, sizeof line, "%s >/dev/null 2>&1", command);
-    int status = system(line);
-    return status != -1 && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-}
-
-static int run(const char *command)
-{
-    int status = system(command);
-    return status != -1 && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 static int count_of(const char *text, const char *needle)
 {
@@ -144,20 +131,28 @@ static void check_svg(const pz_export_inputs *inputs, const char *tag)
     int32_t labels = 0, doubled = 0;
     for (int32_t p = 0; p < pieces->piece_count; ++p)
         if (!pieces->pieces[p].mirrored) {
-            labels += pieces->pieces[p].notch_count;
+            labels += distinct_notches(&pieces->pieces[p]);
             doubled += pieces->pieces[p].cut_quantity == 2;
+            /* Every notch's own label is shown (alone, or joined with those at the same place). */
+            for (int32_t i = 0; i < pieces->pieces[p].notch_count; ++i) {
+                char shown[40];
+                snprintf(shown, sizeof shown, "%s<", pieces->pieces[p].notches[i].label);
+                char joined[40];
+                snprintf(joined, sizeof joined, "%s ", pieces->pieces[p].notches[i].label);
+                CHECK(strstr(svg, shown) || strstr(svg, joined), "%s: notch label %s not shown", tag, shown);
+            }
         }
-    CHECK(count_of(svg, "class=\"notch-label\"") == labels, "%s: %d notch labels, %d notches", tag,
+    CHECK(count_of(svg, "class=\"notch-label\"") == labels, "%s: %d notch labels, %d notches at distinct places", tag,
           count_of(svg, "class=\"notch-label\""), (int)labels);
     CHECK(count_of(svg, ">Cut 2 mirrored<") == doubled && count_of(svg, ">Cut 1<") == drawn - doubled,
           "%s: cut counts", tag);
     CHECK(strstr(svg, "width=\"100.000\" height=\"100.000\"") && strstr(svg, "10 cm"), "%s: no 10 cm scale box", tag);
     CHECK(!strstr(svg, "<&") && strstr(svg, "</svg>\n"), "%s: escaping or end", tag);
-    if (has_program("rsvg-convert --version")) {
+    if (reader_available("rsvg-convert --version", "rsvg-convert")) {
         char command[1200], png[512];
         test_temp_path(png, sizeof png, "pattern.png");
         snprintf(command, sizeof command, "rsvg-convert --dpi-x 25.4 --dpi-y 25.4 -o '%s' '%s'", png, path);
-        CHECK(run(command) == 0, "%s: rsvg-convert failed", tag);
+        CHECK(reader_run(command) == 0, "%s: rsvg-convert failed", tag);
         size_t png_size = 0;
         unsigned char *image = test_read_file(png, &png_size);
         CHECK(image && png_size > 24, "%s: no PNG", tag);
@@ -176,49 +171,14 @@ static void check_svg(const pz_export_inputs *inputs, const char *tag)
 
 /* ---------------------------------------------------------------- dxf */
 
-static double cut_perimeter(const pz_piece *piece)
-{
-    double length = 0;
-    for (int32_t i = 0; i < piece->cut_count; ++i) {
-        const double *a = &piece->cut[2 * i], *b = &piece->cut[2 * ((i + 1) % piece->cut_count)];
-        length += hypot(b[0] - a[0], b[1] - a[1]);
-    }
-    return length;
-}
-
-/* The block name pattern.dxf gives a piece (names here are unique). */
-static void expected_block(const char *name, char out[64])
-{
-    size_t length = 0;
-    for (; name[length] && length < 47; ++length) {
-        unsigned char c = (unsigned char)name[length];
-        out[length] = (c >= '0' && c <= '9') || (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_' || c == '-'
-                          ? (char)c : '_';
-    }
-    out[length] = '\0';
-}
-
 static void check_dxf(pz_export_inputs *inputs, pz_export_options *options, const char *tag)
 {
     const pz_pieces *pieces = inputs->pieces;
     char expected_path[512], path[512], file_name[64];
     snprintf(file_name, sizeof file_name, "%s-expected.txt", tag);
     test_temp_path(expected_path, sizeof expected_path, file_name);
-    FILE *expected = fopen(expected_path, "w");
-    REQUIRE(expected, "cannot create %s", expected_path);
-    for (int32_t p = 0; p < pieces->piece_count; ++p) {
-        const pz_piece *piece = &pieces->pieces[p];
-        if (piece->mirrored)
-            continue;
-        char block[64];
-        expected_block(piece->name, block);
-        fprintf(expected, "%s %d %.9f %d %d\n", block, (int)piece->cut_count, cut_perimeter(piece),
-                (int)piece->notch_count, (int)piece->line_count);
-    }
-    fclose(expected);
-    int checker = has_program("/usr/bin/python3 -c 'import ezdxf'");
-    if (!checker)
-        printf("ezdxf (/usr/bin/python3): not installed, DXF read-back skipped\n");
+    piece_checks_write_dxf_expected(pieces, expected_path);
+    int checker = reader_available("/usr/bin/python3 -c 'import ezdxf'", "ezdxf (/usr/bin/python3)");
     const char *source = getenv("PZ_SOURCE_DIR");
     for (int strict = 0; strict < 2; ++strict) {
         options->dxf_strict = strict;
@@ -237,17 +197,12 @@ static void check_dxf(pz_export_inputs *inputs, pz_export_options *options, cons
               count_of(dxf, "\nINSERT\n"));
         if (checker && source) {
             char command[1600];
-            snprintf(command, sizeof command, "/usr/bin/python3 '%s/tests/export/check_dxf.py' '%s' '%s' > '%s.log' 2>&1",
-                     source, path, expected_path, path);
-            int status = run(command);
-            char log_path[600];
+            snprintf(command, sizeof command, "/usr/bin/python3 '%s/tests/export/check_dxf.py' '%s' '%s'", source, path,
+                     expected_path);
+            char log_path[600], what[120];
             snprintf(log_path, sizeof log_path, "%s.log", path);
-            size_t log_size = 0;
-            char *log = (char *)test_read_file(log_path, &log_size);
-            if (log)
-                log[log_size] = '\0';
-            CHECK(status == 0, "%s: ezdxf check: %s", file_name, log ? log : "(no output)");
-            free(log);
+            snprintf(what, sizeof what, "%s: ezdxf check", file_name);
+            reader_passes(command, log_path, what);
         }
         free(dxf);
     }
@@ -289,6 +244,32 @@ static void test_bodice(void)
     fixture_free(&f);
 }
 
+/* Pieces with the same name get distinct block names: "_K" (the panel) appended, again if that clashes. */
+static void test_block_names(void)
+{
+    fixture f = fixture_generated(PZ_SHAPE_BODICE, 2000, 1);
+    const char *names[4] = {"front", "front", "front_1", "back"};
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, names, &pieces, &ctx), ctx);
+    pz_export_inputs inputs = {.pattern = f.pattern, .uv = f.uv, .pieces = pieces, .options = &options};
+    char path[512];
+    size_t size = 0;
+    char *dxf = write_file("names.dxf", pz_export_write_dxf, &inputs, path, &size);
+    const char *expected[4] = {"front_0", "front_1_1", "front_1_2", "back"};
+    for (int i = 0; i < 4; ++i) {
+        char block[80], insert[80];
+        snprintf(block, sizeof block, "\nBLOCK\n  8\n0\n  2\n%s\n", expected[i]);
+        snprintf(insert, sizeof insert, "\nINSERT\n  8\n0\n  2\n%s\n", expected[i]);
+        CHECK(count_of(dxf, block) == 1 && count_of(dxf, insert) == 1, "block %s: %d defined, %d inserted", expected[i],
+              count_of(dxf, block), count_of(dxf, insert));
+    }
+    free(dxf);
+    pz_pieces_free(&pieces);
+    fixture_free(&f);
+}
+
 /* The skirt's true UV pattern has darts: dart lines and notches must come through. */
 static void test_skirt(void)
 {
@@ -310,6 +291,7 @@ int main(void)
 {
     test_temp_dir_create("pz_export_svg_dxf");
     test_bodice();
+    test_block_names();
     test_skirt();
     if (!getenv("PZ_KEEP_OUTPUT"))
         test_remove_tree(test_temp_dir);

@@ -1,0 +1,153 @@
+/*
+ * tests/export/test_run_patterns.c -- the patterns `panelize run` makes of
+ * every garment in ../shared/data/garments, through the export's checks and
+ * through real readers (skipped, exit 77, without the shared data).
+ *
+ * For each garment, `panelize run GARMENT -o DIR` (the whole pipeline, its
+ * default options: 10 mm allowances, 100 mm notch spacing, 1500 mm fabric,
+ * 5 mm gap) must succeed; then
+ *  - the pieces: DIR/garment.obj read back (panels from its `g panel_K`
+ *    groups, seams and darts found again, uv = its vt), pz_pieces_build with
+ *    the same options: on every piece the cut line lies at the allowance
+ *    outside the sew line (within 0.1 mm) and never crosses itself, and
+ *    every notch pair sits at equal arc length within 0.5 mm
+ *    (piece_checks.h);
+ *  - the marker of those pieces: no overlap (closer than the gap), inside
+ *    the fabric width, rotations 0/180, pairs as pairs (marker_checks.h);
+ *  - the run's own files, by real readers: pattern.dxf by ezdxf (audit
+ *    clean; every block one of our pieces, a closed cut and sew polyline of
+ *    our vertex count and perimeter: check_dxf.py --subset, since the run
+ *    leaves out the second piece of a mirrored pair), garment.glb by the
+ *    Khronos validator (zero errors), pattern.svg and marker.svg by
+ *    rsvg-convert, both PDFs by pdfinfo and pdftoppm, report.html by an XML
+ *    parser. A reader that is not installed skips its check (printed),
+ *    except with CI=true, where it fails.
+ * One line per garment (pieces, notches, marker, seconds of the run).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "export_fixtures.h"
+#include "marker_checks.h"
+#include "piece_checks.h"
+#include "readers.h"
+
+static pz_ctx ctx;
+
+typedef struct readers {
+    int ezdxf, validator, rsvg, poppler, python;
+    const char *source, *validator_dir;
+} readers;
+
+static void check_files(const readers *r, const char *dir, const pz_pieces *pieces, const char *name)
+{
+    char command[4000], log[1200], expected[1200], what[200];
+    snprintf(log, sizeof log, "%s/reader.log", dir);
+    if (r->ezdxf) {
+        snprintf(expected, sizeof expected, "%s/expected.txt", dir);
+        piece_checks_write_dxf_expected(pieces, expected);
+        snprintf(command, sizeof command, "/usr/bin/python3 '%s/tests/export/check_dxf.py' --subset '%s/pattern.dxf' '%s'",
+                 r->source, dir, expected);
+        snprintf(what, sizeof what, "%s: pattern.dxf by ezdxf", name);
+        reader_passes(command, log, what);
+    }
+    if (r->validator) {
+        snprintf(command, sizeof command, "node '%s/tests/export/validate_glb.js' '%s' '%s/garment.glb'", r->source,
+                 r->validator_dir, dir);
+        snprintf(what, sizeof what, "%s: garment.glb by the Khronos validator", name);
+        reader_passes(command, log, what);
+    }
+    if (r->rsvg) {
+        snprintf(command, sizeof command,
+                 "rsvg-convert -w 400 -o '%s/pattern.png' '%s/pattern.svg' && "
+                 "rsvg-convert -w 400 -o '%s/marker.png' '%s/marker.svg'",
+                 dir, dir, dir, dir);
+        snprintf(what, sizeof what, "%s: pattern.svg and marker.svg by rsvg-convert", name);
+        reader_passes(command, log, what);
+    }
+    if (r->poppler) {
+        /* The sheet whole at 2 dpi (it can be metres wide), the tiled PDF's cover and first tiles at 20. */
+        snprintf(command, sizeof command,
+                 "pdfinfo '%s/pattern.pdf' | grep -q '^Pages: *1$' && pdftoppm -r 2 '%s/pattern.pdf' '%s/sheet' && "
+                 "pdfinfo '%s/pattern-tiled.pdf' | grep -q '^Pages: *[0-9]' && "
+                 "pdftoppm -r 20 -f 1 -l 3 '%s/pattern-tiled.pdf' '%s/tile'",
+                 dir, dir, dir, dir, dir, dir);
+        snprintf(what, sizeof what, "%s: pattern.pdf and pattern-tiled.pdf by pdfinfo and pdftoppm", name);
+        reader_passes(command, log, what);
+    }
+    if (r->python) {
+        snprintf(command, sizeof command,
+                 "/usr/bin/python3 -c 'import sys, xml.etree.ElementTree as e; e.parse(sys.argv[1])' '%s/report.html'",
+                 dir);
+        snprintf(what, sizeof what, "%s: report.html is well-formed", name);
+        reader_passes(command, log, what);
+    }
+}
+
+static void check_garment(const readers *r, const char *data, const char *file)
+{
+    char garment[1024], dir[600], command[2400], obj[700];
+    snprintf(garment, sizeof garment, "%s/garments/%s", data, file);
+    snprintf(dir, sizeof dir, "%s/%s", test_temp_dir, file);
+    snprintf(command, sizeof command, "'%s' run '%s' -o '%s' --quiet > '%s.log' 2>&1", getenv("PZ_BINARY"), garment,
+             dir, dir);
+    double start = pz_seconds();
+    int status = reader_run(command);
+    double seconds = pz_seconds() - start;
+    CHECK(status == 0, "%s: panelize run exits %d (%s.log)", file, status, dir);
+    if (status != 0)
+        return;
+    snprintf(obj, sizeof obj, "%s/garment.obj", dir);
+    fixture f;
+    REQUIRE(fixture_from_pattern_obj(&f, obj), "%s: the run's pattern cannot be read back", file);
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx), ctx);
+    check_piece_cuts(f.pattern, pieces, file);
+    double worst_end, worst = check_notch_pairs(f.pattern, pieces, f.uv, file, &worst_end);
+    pz_marker *marker = NULL;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    check_marker(pieces, marker, &options);
+    int32_t notches = 0, cut_points = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p) {
+        notches += pieces->pieces[p].notch_count;
+        cut_points += pieces->pieces[p].cut_count;
+    }
+    printf("%-26s %3d pieces, %3d seams, %d darts, %4d notches (pairs within %.1e mm, ends %.2f mm), %5d cut "
+           "points, marker %.0f mm %.1f %%, run %.1f s\n",
+           file, (int)pieces->piece_count, (int)f.pattern->seam_count, (int)f.pattern->dart_count, (int)notches, worst,
+           worst_end, (int)cut_points, marker->length_mm, 100 * marker->efficiency, seconds);
+    check_files(r, dir, pieces, file);
+    pz_marker_free(&marker);
+    pz_pieces_free(&pieces);
+    fixture_free(&f);
+}
+
+int main(void)
+{
+    ctx.quiet = 1;
+    const char *data = test_shared_data();
+    if (!data)
+        test_skip("no shared data (PZ_SHARED_DATA)");
+    REQUIRE(getenv("PZ_BINARY") && getenv("PZ_SOURCE_DIR"), "PZ_BINARY and PZ_SOURCE_DIR must be set (ctest does)");
+    readers r = {0};
+    r.source = getenv("PZ_SOURCE_DIR");
+    char validator_dir[700], probe[800];
+    snprintf(validator_dir, sizeof validator_dir, "%s/.tools/node_modules/gltf-validator", r.source);
+    r.validator_dir = validator_dir;
+    snprintf(probe, sizeof probe, "command -v node && test -d '%s'", validator_dir);
+    r.ezdxf = reader_available("/usr/bin/python3 -c 'import ezdxf'", "ezdxf (/usr/bin/python3)");
+    r.validator = reader_available(probe, "the Khronos glTF validator (node, .tools)");
+    r.rsvg = reader_available("command -v rsvg-convert", "rsvg-convert");
+    r.poppler = reader_available("command -v pdfinfo && command -v pdftoppm", "poppler (pdfinfo, pdftoppm)");
+    r.python = reader_available("command -v /usr/bin/python3", "/usr/bin/python3");
+    test_temp_dir_create("pz_run_patterns");
+    for (size_t g = 0; g < sizeof fixture_garments / sizeof fixture_garments[0]; ++g)
+        check_garment(&r, data, fixture_garments[g].file);
+    if (!getenv("PZ_KEEP_OUTPUT"))
+        test_remove_tree(test_temp_dir);
+    else
+        printf("output kept in %s\n", test_temp_dir);
+    return test_finish();
+}
