@@ -167,15 +167,19 @@ typedef struct pz_marker {
     double efficiency;           /* sum of piece areas (cut lines) / (width x length) */
     int32_t passes;              /* greedy placement passes the search ran (docs/marker.md) */
     double ms;                   /* time to build */
+    int32_t unplaced_count;      /* pieces wider than the fabric in both turns: not in the marker */
+    int32_t *unplaced;           /* unplaced_count piece indices */
 } pz_marker;
 
 /**
  * Nests every piece (each copy of its cut quantity) on a fabric of
  * fabric_width_mm along x, growing along y, rotations 0 or 180 degrees
  * only, pairs placed side by side, gap_mm between pieces (method in
- * docs/marker.md). PZ_ERR_DATA when a piece is wider than the fabric in both
- * rotations or has a non-finite cut-line coordinate, PZ_ERR_USAGE for a
- * fabric width that is not finite, PZ_ERR_NOMEM. Deterministic. Caller
+ * docs/marker.md). A piece wider than the fabric (its cut line's width, the
+ * same at 0 and 180 degrees) cannot be cut from it with the grain kept: it is
+ * left out and listed in unplaced (the rest is still nested; the caller
+ * warns). PZ_ERR_DATA for a non-finite cut-line coordinate, PZ_ERR_USAGE for
+ * a fabric width that is not finite, PZ_ERR_NOMEM. Deterministic. Caller
  * frees with pz_marker_free.
  */
 pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *options, pz_marker **out, pz_ctx *ctx);

@@ -807,15 +807,32 @@ static pz_status check_pieces(const pz_pieces *pieces, double width_mm, pz_ctx *
     return PZ_OK;
 }
 
-/* The demands of every drawn piece (mirrored == 0, a cut line to place); *count written. */
+/* 1 when the piece's cut line is wider than the fabric (in cells: the raster rounds a width up to whole
+ * cells and keeps its reach clear of the edges). */
+static int wider_than_fabric(const raster *raster, const pz_piece *piece)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (int32_t i = 0; i < piece->cut_count; ++i) {
+        lo = fmin(lo, piece->cut[2 * i]);
+        hi = fmax(hi, piece->cut[2 * i]);
+    }
+    return hi - lo + 2 * raster->resolution > raster->width_mm;
+}
+
+/* The demands of every drawn piece (mirrored == 0, a cut line to place) that fits the fabric's width;
+ * *count written, the others listed in marker->unplaced. */
 static pz_status build_demands(const raster *raster, const pz_pieces *pieces, demand *demands, int32_t *count,
-                               pz_ctx *ctx)
+                               pz_marker *marker, pz_ctx *ctx)
 {
     *count = 0;
     for (int32_t p = 0; p < pieces->piece_count; ++p) {
         const pz_piece *piece = &pieces->pieces[p];
         if (piece->mirrored || piece->cut_count < 3)
             continue;
+        if (wider_than_fabric(raster, piece)) {
+            marker->unplaced[marker->unplaced_count++] = p;
+            continue;
+        }
         if (!demand_build(raster, pieces, p, &demands[(*count)++]))
             return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
     }
@@ -847,14 +864,17 @@ pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *opti
     s.order = malloc(3 * n * sizeof(int32_t));
     s.trial = malloc(2 * n * sizeof *s.trial);
     s.best = calloc(1, sizeof *s.best);
-    if (s.best)
+    if (s.best) {
         s.best->placements = malloc(2 * n * sizeof *s.best->placements);
-    if (!demands || !s.order || !s.trial || !s.best || !s.best->placements || !grid_grow(&s.grid, 1))
+        s.best->unplaced = malloc(n * sizeof *s.best->unplaced);
+    }
+    if (!demands || !s.order || !s.trial || !s.best || !s.best->placements || !s.best->unplaced ||
+        !grid_grow(&s.grid, 1))
         status = pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
     if (status == PZ_OK) {
         s.trial_order = s.order + n, s.scratch = s.order + 2 * n;
         s.demands = demands;
-        status = build_demands(&s.grid.raster, pieces, demands, &s.count, ctx);
+        status = build_demands(&s.grid.raster, pieces, demands, &s.count, s.best, ctx);
     }
     if (status == PZ_OK)
         status = search_run(&s, ctx);
@@ -888,6 +908,7 @@ void pz_marker_free(pz_marker **marker)
     if (!marker || !*marker)
         return;
     free((*marker)->placements);
+    free((*marker)->unplaced);
     free(*marker);
     *marker = NULL;
 }
@@ -905,6 +926,10 @@ cJSON *pz_marker_report_json(const pz_marker *marker)
              cJSON_AddNumberToObject(json, "ms", round(marker->ms * 10) / 10) &&
              cJSON_AddStringToObject(json, "method",
                                      "raster bottom-left fill over true shapes, order search, rotations 0/180");
+    cJSON *unplaced = ok ? cJSON_AddArrayToObject(json, "unplaced") : NULL;
+    ok = ok && unplaced;
+    for (int32_t i = 0; ok && i < marker->unplaced_count; ++i)
+        ok = cJSON_AddItemToArray(unplaced, cJSON_CreateNumber(marker->unplaced[i]));
     if (!ok)
         cJSON_Delete(json);
     return ok ? json : NULL;
@@ -965,8 +990,13 @@ pz_status pz_export_write_marker_svg(FILE *file, const pz_export_inputs *inputs,
           file);
     fprintf(file, "<text x=\"5\" y=\"%.2f\" font-size=\"14\" font-family=\"sans-serif\">marker: ", -band / 2);
     pz_xml_put_text(file, inputs->pieces->garment_name);
-    fprintf(file, ", fabric %.0f mm, length %.1f mm, efficiency %.1f %%, %d pieces</text>\n", width, length,
+    fprintf(file, ", fabric %.0f mm, length %.1f mm, efficiency %.1f %%, %d pieces", width, length,
             marker->efficiency * 100.0, (int)marker->placement_count);
+    for (int32_t i = 0; i < marker->unplaced_count; ++i) {
+        fputs(i ? ", " : "; wider than the fabric, not placed: ", file);
+        pz_xml_put_text(file, inputs->pieces->pieces[marker->unplaced[i]].name);
+    }
+    fputs("</text>\n", file);
     fprintf(file, "<rect class=\"fabric\" x=\"0\" y=\"0\" width=\"%.2f\" height=\"%.2f\" fill=\"#fff\" "
                   "stroke=\"#00f\" stroke-width=\"0.5\"/>\n",
             width, length);

@@ -1083,6 +1083,12 @@ static pz_status build_pieces(const flatten_settings *settings, const pz_flatten
         status = pz_pieces_build(pattern, uv, &options, panel_mirror, panel_names, pieces, ctx);
     if (status == PZ_OK)
         status = pz_marker_build(*pieces, &options, marker, ctx);
+    for (int32_t i = 0; status == PZ_OK && i < (*marker)->unplaced_count; ++i) {
+        const pz_piece *piece = &(*pieces)->pieces[(*marker)->unplaced[i]];
+        pz_note(ctx, "warning: marker: piece %s (%.0f mm wide) does not fit on a fabric %.0f mm wide: left out of "
+                "marker.svg (give a wider --fabric-width)", piece->name, piece->bbox_max[0] - piece->bbox_min[0],
+                (*marker)->fabric_width_mm);
+    }
     return status;
 }
 

@@ -74,6 +74,16 @@ static inline void check_marker(const pz_pieces *pieces, const pz_marker *marker
     double area = 0.0, top = 0.0;
     for (int32_t p = 0; p < pieces->piece_count; ++p)
         expected += pieces->pieces[p].mirrored ? 0 : pieces->pieces[p].cut_quantity;
+    /* Pieces left out must be wider than the fabric (their copies are not placed). */
+    for (int32_t i = 0; i < marker->unplaced_count; ++i) {
+        const pz_piece *piece = &pieces->pieces[marker->unplaced[i]];
+        double lo = INFINITY, hi = -INFINITY;
+        for (int32_t k = 0; k < piece->cut_count; ++k)
+            lo = fmin(lo, piece->cut[2 * k]), hi = fmax(hi, piece->cut[2 * k]);
+        CHECK(hi - lo > marker->fabric_width_mm - 20, "piece %s (%.0f mm) left out of a %.0f mm fabric", piece->name,
+              hi - lo, marker->fabric_width_mm);
+        expected -= piece->cut_quantity;
+    }
     CHECK(marker->placement_count == expected, "%d placements, %d copies", (int)marker->placement_count,
           (int)expected);
     double **points = calloc((size_t)marker->placement_count, sizeof *points);

@@ -155,11 +155,21 @@ static void test_too_wide(void)
     pz_export_options options;
     pz_export_options_default(&options);
     options.fabric_width_mm = 1500;
-    pz_marker *marker = (pz_marker *)&options; /* must come back NULL */
-    CHECK(pz_marker_build(pieces, &options, &marker, &ctx) == PZ_ERR_DATA && strstr(ctx.error, "wide_one") &&
-              marker == NULL,
-          "%s", ctx.error);
+    /* A piece wider than the fabric cannot be cut from it with the grain kept: it is left out and listed,
+     * the rest is nested as usual. */
+    pz_marker *marker = NULL;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    CHECK(marker->unplaced_count == 1 && marker->unplaced[0] == 1, "unplaced: %d", (int)marker->unplaced_count);
+    CHECK(marker->placement_count == 1 && marker->placements[0].piece == 0, "placements: %d",
+          (int)marker->placement_count);
+    cJSON *json = pz_marker_report_json(marker);
+    cJSON *unplaced = json ? cJSON_GetObjectItem(json, "unplaced") : NULL;
+    CHECK(unplaced && cJSON_GetArraySize(unplaced) == 1 && cJSON_GetArrayItem(unplaced, 0)->valueint == 1,
+          "report.json marker.unplaced");
+    cJSON_Delete(json);
+    pz_marker_free(&marker);
     /* Coordinates that cannot be rasterized. */
+    marker = (pz_marker *)&options; /* must come back NULL */
     pieces->pieces[0].cut[3] = NAN;
     CHECK(pz_marker_build(pieces, &options, &marker, &ctx) == PZ_ERR_DATA && strstr(ctx.error, "small") && !marker,
           "NaN: %s", ctx.error);
@@ -208,8 +218,10 @@ static void check_garment(const char *dir, const char *file)
     for (int32_t p = 0; p < pieces->piece_count; ++p)
         widest = fmax(widest, pieces->pieces[p].bbox_max[0] - pieces->pieces[p].bbox_min[0]);
     if (widest > options.fabric_width_mm) {
-        /* One panel for a whole garment can be wider than the fabric: refused, then laid on a wider one. */
-        CHECK(pz_marker_build(pieces, &options, &marker, &ctx) == PZ_ERR_DATA && !marker, "%s: wide piece", file);
+        /* One panel for a whole garment can be wider than the fabric: left out, then laid on a wider one. */
+        REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+        CHECK(marker->unplaced_count >= 1, "%s: the wide piece was placed", file);
+        pz_marker_free(&marker);
         options.fabric_width_mm = ceil(widest) + 100;
     }
     REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
