@@ -66,10 +66,11 @@
 #define PZ_CLI_OPT_GAP (UINT64_C(1) << 36) /* --gap MM */
 #define PZ_CLI_OPT_DXF_STRICT (UINT64_C(1) << 37) /* --dxf-strict (a flag: stored as the value "1") */
 #define PZ_CLI_OPT_TRUING (UINT64_C(1) << 38) /* --truing on|off (run) */
+#define PZ_CLI_OPT_SIZE (UINT64_C(1) << 39) /* --size NAME: the size printed on every piece */
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 30
+#define PZ_CLI_VALUE_COUNT 31
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;
@@ -81,7 +82,7 @@ static inline int pz_cli_value_index(uint64_t flag)
 /** The pattern-file options of `flatten` and `run` (export/export.h). */
 #define PZ_CLI_OPT_EXPORT                                                                                   \
     (PZ_CLI_OPT_SEAM_ALLOWANCE | PZ_CLI_OPT_HEM_ALLOWANCE | PZ_CLI_OPT_ALLOWANCES | PZ_CLI_OPT_NOTCH_SPACING | \
-     PZ_CLI_OPT_PAPER | PZ_CLI_OPT_FABRIC_WIDTH | PZ_CLI_OPT_GAP | PZ_CLI_OPT_DXF_STRICT)
+     PZ_CLI_OPT_PAPER | PZ_CLI_OPT_FABRIC_WIDTH | PZ_CLI_OPT_GAP | PZ_CLI_OPT_DXF_STRICT | PZ_CLI_OPT_SIZE)
 
 /** Options every command takes. */
 #define PZ_CLI_OPT_COMMON (PZ_CLI_OPT_QUIET | PZ_CLI_OPT_JSON)

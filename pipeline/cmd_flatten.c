@@ -52,16 +52,25 @@ const char pz_cli_flatten_usage[] =
     "           [--darts [K:]FILE]... [--grain X,Y,Z] [--pose FILE]...\n"
     "           [--backend textile|lscm|wirewarp|springmass] [--scheme global|progressive]\n"
     "           [--relax heap|full] [--features FILE] [--iterations N] [--weights S,R,D,M]\n"
-    "           [--fabric KSU,KSV,KR] [--units U] [--repair] [--json] [--quiet]\n"
+    "           [--fabric KSU,KSV,KR] [--seam-allowance MM] [--hem-allowance MM]\n"
+    "           [--allowances FILE] [--notch-spacing MM] [--paper a4|letter] [--dxf-strict]\n"
+    "           [--fabric-width MM] [--gap MM] [--size NAME] [--units U] [--repair]\n"
+    "           [--json] [--quiet]\n"
     "\n"
     "Flattens every panel of a garment into a sewing pattern and writes, into DIR\n"
-    "(created when missing):\n"
-    "  garment.obj   the input's vertices and faces unchanged, vt = the pattern (mm),\n"
-    "                one group panel_K per panel\n"
-    "  pattern.svg   the pieces at 1:1 in millimetres with outlines and grainlines\n"
-    "  report.json   strain, shear, energies, seam and dart figures per panel\n"
-    "  energy.svg    (springmass only) the pieces coloured by strain energy, with\n"
-    "                the suggested cutting lines\n"
+    "(created when missing; all files or none):\n"
+    "  garment.obj        the input's vertices and faces unchanged, vt = the pattern\n"
+    "                     (mm), one group panel_K per panel\n"
+    "  pattern.svg        the pieces at 1:1 in mm: cut and sew lines, notches, darts,\n"
+    "                     grainlines, labels, a 10 cm scale box\n"
+    "  pattern.pdf        the same on one 1:1 sheet; pattern-tiled.pdf on A4/Letter\n"
+    "  pattern.dxf        AAMA/ASTM D6673 DXF R12 for CAD and cutters\n"
+    "  marker.svg         the pieces nested on the fabric (grain kept)\n"
+    "  garment.glb        the 3D garment, one colour per panel, the pattern as UVs\n"
+    "  report.json        strain, shear, energies, seam and dart figures, marker\n"
+    "  report.html        a self-contained page with the pattern and the figures\n"
+    "  energy.svg         (springmass only) the pieces coloured by strain energy,\n"
+    "                     with the suggested cutting lines\n"
     "\n"
     "Panels: a disk mesh is one panel; OBJ groups and connected components are\n"
     "panels; several MESH files are concatenated, panel K = file K. A panel that\n"
@@ -92,12 +101,21 @@ const char pz_cli_flatten_usage[] =
     "                       stiffness (N/mm/rad) for the orthotropic energy\n"
     "                       (default 0.946,0.548,0.159); with springmass, given\n"
     "                       = use the orthotropic energy instead of springs\n"
+    "  --seam-allowance MM  the cut line's distance outside the sew line (default 10)\n"
+    "  --hem-allowance MM   the same on open edges (default: the seam allowance)\n"
+    "  --allowances FILE    per-seam allowances (docs/export.md)\n"
+    "  --notch-spacing MM   notches along every seam this far apart (default 100)\n"
+    "  --paper a4|letter    pattern-tiled.pdf's pages (default a4)\n"
+    "  --dxf-strict         DXF without TABLES, 7-bit ASCII, for strict cutters\n"
+    "  --fabric-width MM    the marker's fabric width (default 1500)\n"
+    "  --gap MM             space between pieces on the marker (default 5)\n"
+    "  --size NAME          the size printed on every piece (default base)\n"
     "  --units U            the input's units: mm, cm, m or auto (default)\n"
     "  --repair             repair the mesh before validating (see panelize check)\n"
     "  --json               print report.json on stdout\n"
     "  --quiet              nothing on stderr but an error\n"
     "\n"
-    "See docs/flatten.md.\n";
+    "See docs/flatten.md and docs/export.md.\n";
 
 #define DEFAULT_ITERATIONS 20
 #define MAX_ITERATIONS 10000
@@ -210,6 +228,12 @@ static pz_status parse_export_options(const pz_cli_args *args, flatten_settings 
         options->paper = (text[0] == 'a' || text[0] == 'A') ? "a4" : "letter";
     }
     options->dxf_strict = pz_cli_value(args, PZ_CLI_OPT_DXF_STRICT) != NULL;
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SIZE))) {
+        if (!*text || strlen(text) >= sizeof ((pz_pieces *)0)->size_name)
+            return pz_error(ctx, PZ_ERR_USAGE, "%s: --size: '%s' is not a name of 1 to %d characters", args->command,
+                            text, (int)sizeof ((pz_pieces *)0)->size_name - 1);
+        options->size_name = text;
+    }
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_ALLOWANCES))) {
         if (!*text)
             return pz_error(ctx, PZ_ERR_USAGE, "%s: --allowances: empty file name", args->command);
@@ -947,7 +971,8 @@ static pz_status build_report(flatten_run *run, pz_ctx *ctx)
     return PZ_OK;
 }
 
-static pz_status write_file(flatten_run *run, const output_entry *entry, FILE *file, pz_ctx *ctx)
+/* Writes one output; path (the file's full name) names it in errors. */
+static pz_status write_file(flatten_run *run, const output_entry *entry, const char *path, FILE *file, pz_ctx *ctx)
 {
     switch (entry->kind) {
     case OUT_OBJ:
@@ -956,7 +981,7 @@ static pz_status write_file(flatten_run *run, const output_entry *entry, FILE *f
         return pz_pattern_write_svg(file, run->pattern, run->uv, (const char *const *)run->panels->names, ctx);
     case OUT_EXPORT:
     case OUT_HTML:
-        return pz_export_files[entry->index].write(file, &run->export_inputs, entry->name, ctx);
+        return pz_export_files[entry->index].write(file, &run->export_inputs, path, ctx);
     case OUT_EXTRA: {
         const pz_flatten_extension *extension = run->extension;
         return extension->extra_files[entry->index].write(extension->user, file, run->pattern, ctx);
@@ -970,7 +995,7 @@ static pz_status write_file(flatten_run *run, const output_entry *entry, FILE *f
         return PZ_OK;
     }
     }
-    return pz_error(ctx, PZ_ERR_INTERNAL, "%s: unknown output", entry->name);
+    return pz_error(ctx, PZ_ERR_INTERNAL, "%s: unknown output", path);
 }
 
 /*
@@ -996,7 +1021,7 @@ static pz_status write_outputs(flatten_run *run, pz_ctx *ctx)
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);
     for (int i = 0; i < count && status == PZ_OK; ++i)
         if ((status = pz_output_open(&outputs[i], paths[i], "wb", ctx)) == PZ_OK)
-            status = write_file(run, &run->outputs[i], outputs[i].file, ctx);
+            status = write_file(run, &run->outputs[i], paths[i], outputs[i].file, ctx);
     if (status == PZ_OK && run->springmass) {
         if (!(energy_path = join_path(dir, "energy.svg")))
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", dir);

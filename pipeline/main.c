@@ -112,6 +112,7 @@ static const option_spec option_table[] = {
     {"gap", 0, PZ_CLI_OPT_GAP, 1},
     {"dxf-strict", 0, PZ_CLI_OPT_DXF_STRICT, 0},
     {"truing", 0, PZ_CLI_OPT_TRUING, 1},
+    {"size", 0, PZ_CLI_OPT_SIZE, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 

@@ -145,6 +145,12 @@ report_checks "flatten --panels halves.txt" halves \
     "panels do not overlap and stay injective" "d['summary']['injective'] is True"
 garment_obj_checks "flatten --panels halves.txt" tube.obj halves 2
 svg_checks "flatten --panels halves.txt" halves 2
+# --size names the size on every piece (SVG label and DXF piece text).
+run flatten tube.obj -o sized --panels halves.txt --size 38 --quiet
+expect_ok "flatten --size 38"
+check "flatten --size 38: no piece says Size: 38" grep -q "Size: 38" sized/pattern.svg
+check "flatten --size 38: pieces still say Size: base" sh -c '! grep -q "Size: base" sized/pattern.svg'
+expect_error 64 "--size" --absent sized-bad -- flatten tube.obj -o sized-bad --panels halves.txt --size ""
 # The same split as OBJ groups.
 python3 -c "
 lines = open('tube.obj').read().splitlines()
