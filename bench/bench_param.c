@@ -64,9 +64,9 @@ static int run(const char *name, pz_mesh *mesh, int threads)
     double total = 1e3 * (pz_seconds() - start);
     long after = peak_kb();
     printf("bench_param mesh=%s backend=textile faces=%d init_ms=%.1f iteration_ms=%.2f total_ms=%.1f "
-           "iterations=%d damped=%d threads=%d peak_bytes_per_face=%.0f load=%.2f\n",
+           "iterations=%d bounded=%d damped=%d energy=%.6g threads=%d peak_bytes_per_face=%.0f load=%.2f\n",
            name, mesh->face_count, result.init_ms, result.iteration_ms, total, result.iterations_run,
-           result.damped_steps, threads, 1024.0 * (double)(after - before) / mesh->face_count, bench_load_average());
+           result.bounded_steps, result.damped_steps, result.final_energy, threads, 1024.0 * (double)(after - before) / mesh->face_count, bench_load_average());
     before = after;
     start = pz_seconds();
     if (pz_param_lscm_pattern(&pattern, NULL, uv, &ctx)) {
