@@ -54,30 +54,42 @@ static double cpu_seconds(void)
     return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
 }
 
-/* The peak resident size since `before_kb` was taken, in kB (at least 0). */
-static long peak_growth_kb(long before_kb)
+/* Wall time, CPU time and peak resident size of one call. */
+typedef struct run_clock {
+    long before_kb;
+    double start, cpu_start;
+    double total_ms, cpu_ms, peak_mb, peak_bytes_per_face;
+} run_clock;
+
+static run_clock clock_start(void)
 {
-    long peak_kb = bench_status_kb("VmHWM");
-    return peak_kb > before_kb ? peak_kb - before_kb : 0;
+    run_clock clock = {.before_kb = bench_status_kb("VmRSS"), .start = pz_seconds(), .cpu_start = cpu_seconds()};
+    return clock;
 }
 
-static int run_textile(const char *name, const pz_pattern *pattern, int threads, pz_ctx *ctx)
+/* Times since clock_start, and the peak resident size since then over the
+ * size then (at least 0). */
+static void clock_stop(run_clock *clock, int32_t faces)
+{
+    clock->total_ms = 1e3 * (pz_seconds() - clock->start);
+    clock->cpu_ms = 1e3 * (cpu_seconds() - clock->cpu_start);
+    long peak_kb = bench_status_kb("VmHWM") - clock->before_kb;
+    peak_kb = peak_kb > 0 ? peak_kb : 0;
+    clock->peak_mb = peak_kb / 1024.0;
+    clock->peak_bytes_per_face = 1024.0 * peak_kb / faces;
+}
+
+static int run_textile(const char *name, const pz_pattern *pattern, int threads, double *uv, pz_ctx *ctx)
 {
     const pz_mesh *mesh = pattern->mesh;
-    double *uv = malloc((size_t)mesh->vertex_count * 2 * sizeof(double));
-    if (!uv)
-        return 1;
-    long before_kb = bench_status_kb("VmRSS");
-    double start = pz_seconds(), cpu_start = cpu_seconds();
+    run_clock clock = clock_start();
     pz_textile_options options = {.iterations = 20, .tolerance = 1e-300, .threads = threads};
     pz_textile_result result;
     if (pz_param_textile(pattern, &options, uv, &result, ctx)) {
         fprintf(stderr, "bench_param: %s: %s\n", name, ctx->error);
-        free(uv);
         return 1;
     }
-    double total_ms = 1e3 * (pz_seconds() - start), cpu_ms = 1e3 * (cpu_seconds() - cpu_start);
-    long peak_kb = peak_growth_kb(before_kb);
+    clock_stop(&clock, mesh->face_count);
     pz_metrics *metrics = NULL;
     double max_strain = -1;
     if (pz_metrics_compute(pattern, uv, 0, NULL, &metrics, ctx) == PZ_OK)
@@ -87,33 +99,24 @@ static int run_textile(const char *name, const pz_pattern *pattern, int threads,
            "iterations_ms=%.1f total_ms=%.1f cpu_ms=%.1f bounded=%d damped=%d energy_start=%.6g energy_end=%.6g "
            "max_strain=%.4f peak_mb=%.1f peak_bytes_per_face=%.0f load=%.2f\n",
            name, mesh->face_count, threads, result.init_ms, result.iteration_ms, result.iterations_run,
-           result.solve_ms, total_ms, cpu_ms, result.bounded_steps, result.damped_steps, result.initial_energy,
-           result.final_energy, max_strain, peak_kb / 1024.0, 1024.0 * peak_kb / mesh->face_count,
+           result.solve_ms, clock.total_ms, clock.cpu_ms, result.bounded_steps, result.damped_steps,
+           result.initial_energy, result.final_energy, max_strain, clock.peak_mb, clock.peak_bytes_per_face,
            bench_load_average());
-    free(uv);
     return 0;
 }
 
-static int run_lscm(const char *name, const pz_pattern *pattern, pz_ctx *ctx)
+static int run_lscm(const char *name, const pz_pattern *pattern, double *uv, pz_ctx *ctx)
 {
-    const pz_mesh *mesh = pattern->mesh;
-    double *uv = malloc((size_t)mesh->vertex_count * 2 * sizeof(double));
-    if (!uv)
-        return 1;
-    long before_kb = bench_status_kb("VmRSS");
-    double start = pz_seconds(), cpu_start = cpu_seconds();
+    run_clock clock = clock_start();
     if (pz_param_lscm_pattern(pattern, NULL, uv, ctx)) {
         fprintf(stderr, "bench_param: %s: %s\n", name, ctx->error);
-        free(uv);
         return 1;
     }
-    double total_ms = 1e3 * (pz_seconds() - start), cpu_ms = 1e3 * (cpu_seconds() - cpu_start);
-    long peak_kb = peak_growth_kb(before_kb);
+    clock_stop(&clock, pattern->mesh->face_count);
     printf("bench_param mesh=%s backend=lscm faces=%d total_ms=%.1f cpu_ms=%.1f peak_mb=%.1f "
            "peak_bytes_per_face=%.0f load=%.2f\n",
-           name, mesh->face_count, total_ms, cpu_ms, peak_kb / 1024.0, 1024.0 * peak_kb / mesh->face_count,
+           name, pattern->mesh->face_count, clock.total_ms, clock.cpu_ms, clock.peak_mb, clock.peak_bytes_per_face,
            bench_load_average());
-    free(uv);
     return 0;
 }
 
@@ -159,8 +162,10 @@ static int measure(int32_t faces, int lscm, int threads)
     pattern.mesh = mesh;
     pattern.panel_count = 1;
     pattern.face_panel = calloc((size_t)mesh->face_count, sizeof(int32_t));
-    int failed = !pattern.face_panel ||
-                 (lscm ? run_lscm(name, &pattern, &ctx) : run_textile(name, &pattern, threads, &ctx));
+    double *uv = malloc((size_t)mesh->vertex_count * 2 * sizeof(double));
+    int failed = !pattern.face_panel || !uv ||
+                 (lscm ? run_lscm(name, &pattern, uv, &ctx) : run_textile(name, &pattern, threads, uv, &ctx));
+    free(uv);
     free(pattern.face_panel);
     pz_mesh_free(&mesh);
     return failed;

@@ -324,40 +324,60 @@ static void test_hemisphere(void)
     pattern_release(pattern);
 }
 
-/* 20 steps asked, no tolerance stop: the run takes them all. */
+/* 20 steps asked and no stop on the tolerance (as bench_param runs them). */
+static double *twenty_steps(const pz_pattern *pattern, const char *label, pz_textile_result *result)
+{
+    pz_textile_options options = {.iterations = 20, .tolerance = 1e-300};
+    double *uv = flatten(pattern, &options, result);
+    printf("%s, 20 steps: energy %.4g -> %.4g, %d iterations, %d bounded, %d damped, %d flipped\n", label,
+           result->initial_energy, result->final_energy, result->iterations_run, result->bounded_steps,
+           result->damped_steps, count_flipped(pattern->mesh, uv));
+    return uv;
+}
+
 static void test_hemisphere_steps(void)
 {
     pz_pattern *pattern = pattern_of(generate(PZ_SHAPE_HEMISPHERE, 3000, 0), NULL, 1);
     pz_textile_result result;
-    pz_textile_options options = {.iterations = 20, .tolerance = 1e-300};
-    double *uv = flatten(pattern, &options, &result);
-    printf("hemisphere, 20 steps: energy %.6g -> %.6g, %d iterations, %d bounded, %d damped\n", result.initial_energy,
-           result.final_energy, result.iterations_run, result.bounded_steps, result.damped_steps);
+    double *uv = twenty_steps(pattern, "hemisphere", &result);
     CHECK(result.iterations_run == 20 && result.damped_steps <= 2 && result.final_energy < result.initial_energy,
           "hemisphere, 20 steps: %d iterations, %d damped", result.iterations_run, result.damped_steps);
     free(uv);
     pattern_release(pattern);
 }
 
-static void test_face_scan_steps(void)
+/* The mesh at `relative` under ../shared/data, in mm, or NULL (skipped, said
+ * under `label`) when the data is not there. path: its full path. */
+static pz_mesh *read_shared(const char *relative, const char *label, char path[4200])
 {
     const char *shared = test_shared_data();
     if (!shared) {
-        printf("face scan: skipped (PZ_SHARED_DATA unset)\n");
-        return;
+        printf("%s: skipped (PZ_SHARED_DATA unset)\n", label);
+        return NULL;
     }
-    char path[4096];
-    snprintf(path, sizeof path, "%s/surfaces/face-scan.obj", shared);
+    snprintf(path, 4200, "%s/%s", shared, relative);
+    FILE *exists = fopen(path, "r");
+    if (!exists) {
+        printf("%s: skipped (%s missing)\n", label, path);
+        return NULL;
+    }
+    fclose(exists);
     pz_mesh *mesh = NULL;
     REQUIRE_OK(pz_mesh_read(path, &mesh, &ctx), ctx);
     pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, NULL);
+    return mesh;
+}
+
+static void test_face_scan_steps(void)
+{
+    char path[4200];
+    pz_mesh *mesh = read_shared("surfaces/face-scan.obj", "face scan", path);
+    if (!mesh)
+        return;
     pz_pattern *pattern = pattern_of(mesh, NULL, 1);
     pz_textile_result result;
-    pz_textile_options options = {.iterations = 20, .tolerance = 1e-300};
-    double *uv = flatten(pattern, &options, &result);
+    double *uv = twenty_steps(pattern, "face scan", &result);
     int flipped = count_flipped(pattern->mesh, uv);
-    printf("face scan: energy %.4g -> %.4g, %d iterations, %d bounded, %d damped, %d flipped\n", result.initial_energy,
-           result.final_energy, result.iterations_run, result.bounded_steps, result.damped_steps, flipped);
     CHECK(flipped == 0 && result.iterations_run == 20 && result.final_energy < 0.01 * result.initial_energy &&
               result.damped_steps < result.iterations_run,
           "face scan: %d flipped, %d iterations, energy %g -> %g, %d damped", flipped, result.iterations_run,
@@ -1006,22 +1026,10 @@ static void shirt_run(const pz_pattern *pattern, const pz_textile_options *given
 
 static void test_shirt(void)
 {
-    const char *shared = test_shared_data();
-    if (!shared) {
-        printf("shirt: skipped (PZ_SHARED_DATA unset)\n");
-        return;
-    }
     char path[4200];
-    snprintf(path, sizeof path, "%s/garments/diffavatar-shirt.obj", shared);
-    FILE *exists = fopen(path, "r");
-    if (!exists) {
-        printf("shirt: skipped (%s missing)\n", path);
+    pz_mesh *garment = read_shared("garments/diffavatar-shirt.obj", "shirt", path);
+    if (!garment)
         return;
-    }
-    fclose(exists);
-    pz_mesh *garment = NULL;
-    REQUIRE_OK(pz_mesh_read(path, &garment, &ctx), ctx);
-    pz_mesh_to_mm(garment, PZ_UNITS_AUTO, NULL);
     int32_t *face_panel = malloc((size_t)garment->face_count * sizeof(int32_t));
     REQUIRE(face_panel, "out of memory");
     int32_t panel_count = 0;
