@@ -96,6 +96,11 @@
 /* Bounds of a factorization's cost in PCG steps (see pcg_solve). */
 #define PCG_MIN_STEPS 4
 #define PCG_MAX_STEPS 60
+/* From this cost on, v starts with u's factor as its preconditioner instead
+ * of its own (factorize_when_needed): at 200K faces (60) that saved one
+ * 0.3 s factorization for energies 2e-4 higher after 20 steps; below, the
+ * saving is small and the trajectories of the test meshes changed more. */
+#define BORROW_MIN_STEPS 40
 #define FACTOR_FLOP_COST 2.0
 
 /* Threads pay only when every parallel region has milliseconds of work:
@@ -127,8 +132,11 @@ typedef struct coordinate_solver {
     cholmod_dense *residual;  /* PCG: r, the right-hand side of the preconditioner solve */
     double *product, *current; /* PCG: A x or A z, and the iterate */
     int factored;             /* the factor holds some earlier matrix's numbers */
+    int borrowing;            /* v only: preconditions with u's factor (until it needs its own) */
+    int fresh;                /* the factor was made from this iteration's matrix: solve directly */
+    int failed;               /* this iteration's PCG step failed (global_step solves it directly) */
     int refactor;             /* 1: factorize before the next solve */
-    int direct_runs;          /* after PCG failed: solve directly this many more times */
+    int direct_runs;          /* after PCG failed: factorize and solve directly this many more times */
     int backoff;              /* the next such pause (doubles on repeated failures) */
     int max_steps;            /* what one factorization costs in PCG steps (flop counts, pcg_solve) */
     double *grain_gradient;   /* the panel's grain_gradient for this coordinate at the last assembly */
@@ -392,6 +400,7 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
     for (int k = 0; k < 2 && sv->factor; ++k) {
         coordinate_solver *s = &system->solver[k];
         s->backoff = 1;
+        s->borrowing = k == 1 && s->max_steps >= BORROW_MIN_STEPS;
         s->rhs = cholmod_zeros(n, 1, CHOLMOD_REAL, &s->common);
         s->residual = cholmod_zeros(n, 1, CHOLMOD_REAL, &s->common);
         s->product = malloc((size_t)n * sizeof(double) + 1);
@@ -760,24 +769,35 @@ static pz_status state_setup(textile_state *state, const double *uv, int32_t *le
  * left out.
  */
 #define STRETCH_STEP_RANGE 2.0
-static void face_system(const double c[2][3], const double s[2], const double shear[2], const double t[3][2],
+
+/* Per coordinate k, over the poses used: the mean of s_k, of s_k^2, of
+ * (s_k - 1) J_1 . J_2 / s_k (the shear slope) and of (J_1 . J_2 / s_k)^2. */
+typedef struct stretch_figures {
+    double s[2], second[2], slope[2], curvature[2];
+} stretch_figures;
+
+static void face_system(const double c[2][3], const stretch_figures *figures, const double t[3][2],
                         double stretch_weight, double w_rigid, int k, face_terms *terms)
 {
     static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
     int o = 1 - k;
+    const double *s = figures->s;
     double low = 1 / STRETCH_STEP_RANGE;
     double clamped = s[k] > STRETCH_STEP_RANGE ? STRETCH_STEP_RANGE : s[k] < low ? low : s[k];
     int near = clamped == s[k] && s[o] <= STRETCH_STEP_RANGE && s[o] >= low;
     double row_weight = stretch_weight * clamped;
-    double cross = near ? stretch_weight * (s[o] - 1) * shear[o] : 0;
-    double cross_weight = near ? stretch_weight * shear[o] * shear[o] : 0;
+    /* With poses the row's slope is the mean of the poses' slopes:
+     * sum_p s_p (s_p - 1) = P s (s + var / s - 1); var = 0 for one pose. */
+    double target = near ? s[k] + (figures->second[k] - s[k] * s[k]) / s[k] : clamped;
+    double cross = near ? stretch_weight * figures->slope[o] : 0;
+    double cross_weight = near ? stretch_weight * figures->curvature[o] : 0;
     for (int e = 0; e < 6; ++e) {
         int a = pair[e][0], b = pair[e][1];
         terms->value[k][e] = row_weight * c[k][a] * c[k][b] + cross_weight * c[o][a] * c[o][b] +
                              (a == b ? 2 * w_rigid : -w_rigid);
     }
     for (int a = 0; a < 3; ++a)
-        terms->rhs[k][a] = row_weight * clamped * c[k][a] + cross * c[o][a];
+        terms->rhs[k][a] = row_weight * target * c[k][a] + cross * c[o][a];
     for (int e = 0; e < 3; ++e) {
         terms->rhs[k][(e + 1) % 3] += w_rigid * t[e][k];
         terms->rhs[k][e] -= w_rigid * t[e][k];
@@ -813,24 +833,34 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
         qe[e][0] = q[j][0] - q[e][0];
         qe[e][1] = q[j][1] - q[e][1];
     }
-    double s[2] = {0, 0}, t[3][2] = {{0, 0}, {0, 0}, {0, 0}}, shear[2] = {0, 0};
+    double image[2] = {0, 0}; /* c_k . q: 1 up to rounding (c_k are the hat functions' k-derivatives) */
+    for (int k = 0; k < 2; ++k)
+        for (int i = 0; i < 3; ++i)
+            image[k] += c[k][i] * q[i][k];
+    stretch_figures figures = {{0, 0}, {0, 0}, {0, 0}, {0, 0}};
+    double t[3][2] = {{0, 0}, {0, 0}, {0, 0}}, stretch_sum[2] = {0, 0}, rigid_sum = 0;
     int32_t poses = state->pose_total;
     for (int32_t p = 0; p < poses; ++p) {
         const double *frame = state->frames + ((size_t)f * poses + p) * 3;
         double P[3][2] = {{0, 0}, {frame[0], 0}, {frame[1], frame[2]}};
-        double image[2][2], length[2]; /* J_k in the 3D frame, |J_k| */
+        double thread[2][2], length[2]; /* J_k in the 3D frame, |J_k| */
         for (int k = 0; k < 2; ++k) {
-            image[k][0] = image[k][1] = 0;
+            thread[k][0] = thread[k][1] = 0;
             for (int i = 0; i < 3; ++i) {
-                image[k][0] += c[k][i] * P[i][0];
-                image[k][1] += c[k][i] * P[i][1];
+                thread[k][0] += c[k][i] * P[i][0];
+                thread[k][1] += c[k][i] * P[i][1];
             }
-            length[k] = sqrt(image[k][0] * image[k][0] + image[k][1] * image[k][1]);
-            s[k] += length[k];
+            length[k] = sqrt(thread[k][0] * thread[k][0] + thread[k][1] * thread[k][1]);
         }
-        double threads_dot = image[0][0] * image[1][0] + image[0][1] * image[1][1];
-        for (int k = 0; k < 2; ++k)
-            shear[k] += length[k] > 0 ? threads_dot / length[k] : 0;
+        double threads_dot = thread[0][0] * thread[1][0] + thread[0][1] * thread[1][1];
+        for (int k = 0; k < 2; ++k) {
+            double shear = length[k] > 0 ? threads_dot / length[k] : 0;
+            figures.s[k] += length[k];
+            figures.second[k] += length[k] * length[k];
+            figures.slope[k] += (length[k] - 1) * shear;
+            figures.curvature[k] += shear * shear;
+            stretch_sum[k] += (length[k] - image[k]) * (length[k] - image[k]);
+        }
         double pe[3][2], s00 = 0, s01 = 0, s10 = 0, s11 = 0;
         for (int e = 0; e < 3; ++e) {
             int j = (e + 1) % 3;
@@ -851,35 +881,33 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
             sn = 0;
         }
         for (int e = 0; e < 3; ++e) {
-            t[e][0] += cs * pe[e][0] - sn * pe[e][1];
-            t[e][1] += sn * pe[e][0] + cs * pe[e][1];
+            double target[2] = {cs * pe[e][0] - sn * pe[e][1], sn * pe[e][0] + cs * pe[e][1]};
+            for (int k = 0; k < 2; ++k) {
+                t[e][k] += target[k];
+                rigid_sum += (qe[e][k] - target[k]) * (qe[e][k] - target[k]);
+            }
         }
     }
     double energy = 0, stretch_weight = state->w_stretch * area_3d * (state->stretch_boost ? state->stretch_boost[f] : 1);
     double worst_strain = 0;
     for (int k = 0; k < 2; ++k) {
-        s[k] /= poses;
-        shear[k] /= poses;
+        figures.s[k] /= poses;
+        figures.second[k] /= poses;
+        figures.slope[k] /= poses;
+        figures.curvature[k] /= poses;
         if (stretch) {
-            double image = 0;
-            for (int i = 0; i < 3; ++i)
-                image += c[k][i] * q[i][k];
-            energy += stretch_weight * (s[k] - image) * (s[k] - image);
-            /* image = 1 (c_k are the derivatives of the hat functions along
-             * k), so s_k - 1 is the strain |J_k| - 1 of docs/metrics.md. */
-            worst_strain = fmax(worst_strain, fabs(s[k] - 1));
+            energy += stretch_weight * stretch_sum[k] / poses;
+            /* s_k - 1 is the strain |J_k| - 1 of docs/metrics.md (the mean over poses). */
+            worst_strain = fmax(worst_strain, fabs(figures.s[k] - 1));
         }
+        for (int e = 0; e < 3; ++e)
+            t[e][k] /= poses;
     }
     if (state->face_strain)
         state->face_strain[f] = worst_strain;
-    for (int e = 0; e < 3; ++e)
-        for (int k = 0; k < 2; ++k) {
-            t[e][k] /= poses;
-            double r = qe[e][k] - t[e][k];
-            energy += state->w_rigid * r * r;
-        }
+    energy += state->w_rigid * rigid_sum / poses;
     for (int k = 0; k < 2; ++k)
-        face_system(c, s, shear, t, stretch_weight, state->w_rigid, k, &state->terms[f]);
+        face_system(c, &figures, t, stretch_weight, state->w_rigid, k, &state->terms[f]);
     state->face_energy[f] = energy;
     state->face_flipped[f] = !(twice_area > 0);
     return energy;
@@ -1177,34 +1205,17 @@ static void symmetric_product(const cholmod_sparse *matrix, const double *x, dou
     }
 }
 
-/* z = A^-1 g with the current factor, g = the coordinate's grain_gradient,
- * for project_grain_turn (the residual vector is free outside pcg_solve). */
-static int grain_response(const panel_system *system, coordinate_solver *solver)
+/* z = A^-1 g with the coordinate's current preconditioner, g = its
+ * grain_gradient, for project_grain_turn (the residual vector is free
+ * outside pcg_solve). */
+static int grain_response(const panel_system *system, coordinate_solver *solver, cholmod_factor *factor)
 {
     memcpy(solver->residual->x, solver->grain_gradient, (size_t)system->vertex_count * sizeof(double));
-    if (!cholmod_solve2(CHOLMOD_A, solver->factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
+    if (!cholmod_solve2(CHOLMOD_A, factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
                         &solver->work_e, &solver->common))
         return solver->common.status ? solver->common.status : -1;
     memcpy(solver->grain_response, solver->solution->x, (size_t)system->vertex_count * sizeof(double));
     solver->response_ready = 1;
-    return CHOLMOD_OK;
-}
-
-/* Numeric factorization of the current matrix, then a direct solve. */
-static int direct_solve(panel_system *system, coordinate_solver *solver, int k, double *uv)
-{
-    pz_param_factorize(solver->matrix, solver->factor, &solver->common);
-    if (solver->common.status != CHOLMOD_OK)
-        return solver->common.status ? solver->common.status : -1;
-    solver->factored = 1;
-    solver->refactor = 0;
-    solver->response_ready = 0;
-    if (!cholmod_solve2(CHOLMOD_A, solver->factor, solver->rhs, NULL, &solver->solution, NULL, &solver->work_y,
-                        &solver->work_e, &solver->common))
-        return solver->common.status ? solver->common.status : -1;
-    const double *x = solver->solution->x;
-    for (int32_t l = 0; l < system->vertex_count; ++l)
-        uv[2 * system->vertices[l] + k] = x[l];
     return CHOLMOD_OK;
 }
 
@@ -1232,7 +1243,7 @@ static int direct_solve(panel_system *system, coordinate_solver *solver, int k, 
 #define PCG_TOLERANCE 1e-8
 #define PCG_REDUCTION 1e-2
 #define PCG_MODEL_TOLERANCE 1e-9
-static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, double *uv)
+static int pcg_solve(const panel_system *system, coordinate_solver *solver, cholmod_factor *factor, int k, double *uv)
 {
     int32_t n = system->vertex_count;
     double *b = solver->rhs->x, *r = solver->residual->x, *ap = solver->product;
@@ -1250,7 +1261,7 @@ static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, dou
     }
     if (r_norm <= PCG_TOLERANCE * PCG_TOLERANCE * fmax(b_norm, 1e-300))
         return 1;
-    if (!cholmod_solve2(CHOLMOD_A, solver->factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
+    if (!cholmod_solve2(CHOLMOD_A, factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
                         &solver->work_e, &solver->common))
         return 0;
     const double *z = solver->solution->x;
@@ -1282,9 +1293,9 @@ static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, dou
     return 1;
 }
 
-/* Assembles, refactorizes (when needed) and solves coordinate k of one panel; writes the
- * new coordinate into uv. Returns a CHOLMOD status (CHOLMOD_OK = 0). */
-static int solve_coordinate(const textile_state *state, int32_t panel, int k, double *uv)
+/* Assembles coordinate k's system of one panel from the local step's face
+ * shares, the seam segments and the seam and dart pulls at uv. */
+static void assemble_coordinate(const textile_state *state, int32_t panel, int k, const double *uv)
 {
     const pz_mesh *mesh = state->pattern->mesh;
     panel_system *system = &state->panels[panel];
@@ -1320,48 +1331,129 @@ static int solve_coordinate(const textile_state *state, int32_t panel, int k, do
         rhs[b] += t;
         rhs[a] -= t;
     }
-    int status = CHOLMOD_OK;
     double reg = state->regularization;
-    if (state->project_grain)
-        grain_gradient(state, panel, k, uv, solver->grain_gradient);
     for (int32_t l = 0; l < n; ++l) {
         int32_t v = system->vertices[l];
         values[colp[l + 1] - 1] += state->pull_weight[v] + reg; /* the diagonal ends each upper column */
         rhs[l] += state->pull_target[2 * v + k] + reg * uv[2 * v + k];
     }
-    if (solver->direct_runs > 0) {
-        --solver->direct_runs;
-        status = direct_solve(system, solver, k, uv);
-    } else if (solver->refactor || !solver->factored) {
-        status = direct_solve(system, solver, k, uv);
-    } else if (pcg_solve(system, solver, k, uv)) {
-        solver->backoff = 1;
-    } else {
-        solver->direct_runs = solver->backoff;
-        solver->backoff = solver->backoff < 16 ? 2 * solver->backoff : 16;
-        status = direct_solve(system, solver, k, uv);
-    }
-    if (status == CHOLMOD_OK && state->project_grain && !solver->response_ready)
-        status = grain_response(system, solver);
-    return status;
+    if (state->project_grain)
+        grain_gradient(state, panel, k, uv, solver->grain_gradient);
 }
 
+/*
+ * Factorizes coordinate k's matrix when this iteration needs it: the first
+ * time (u only: v borrows u's factor until it needs its own), when the
+ * factor went stale or a PCG step failed (pcg_solve), and during the
+ * back-off after failures. Returns a CHOLMOD status.
+ */
+static int factorize_when_needed(panel_system *system, int k)
+{
+    coordinate_solver *solver = &system->solver[k];
+    int needed = solver->direct_runs > 0 || solver->refactor || (!solver->factored && !solver->borrowing);
+    if (!needed)
+        return CHOLMOD_OK;
+    if (solver->direct_runs > 0)
+        --solver->direct_runs;
+    pz_param_factorize(solver->matrix, solver->factor, &solver->common);
+    if (solver->common.status != CHOLMOD_OK)
+        return solver->common.status ? solver->common.status : -1;
+    solver->factored = solver->fresh = 1;
+    solver->refactor = solver->borrowing = 0;
+    solver->response_ready = 0;
+    if (k == 0 && system->solver[1].borrowing)
+        system->solver[1].response_ready = 0;
+    return CHOLMOD_OK;
+}
+
+/*
+ * Solves coordinate k of one panel and writes it into uv: directly with a
+ * factor made this iteration, otherwise one preconditioned step
+ * (pcg_solve). A step that fails leaves uv alone and marks the coordinate
+ * `failed` (global_step then factorizes and solves it directly), and asks
+ * for factorizations in the next iterations too: 1, 2, 4, ... 16 in a row
+ * on repeated failures (large, uneven distortion: the face scan), so a
+ * useless PCG costs at most about what it meant to save. Factors are only
+ * read here, so v can borrow u's while both are solved in parallel.
+ * Returns a CHOLMOD status.
+ */
+static int solve_coordinate(const textile_state *state, int32_t panel, int k, double *uv)
+{
+    panel_system *system = &state->panels[panel];
+    coordinate_solver *solver = &system->solver[k];
+    cholmod_factor *factor = solver->borrowing ? system->solver[0].factor : solver->factor;
+    if (solver->fresh) {
+        solver->fresh = 0;
+        if (!cholmod_solve2(CHOLMOD_A, factor, solver->rhs, NULL, &solver->solution, NULL, &solver->work_y,
+                            &solver->work_e, &solver->common))
+            return solver->common.status ? solver->common.status : -1;
+        const double *x = solver->solution->x;
+        for (int32_t l = 0; l < system->vertex_count; ++l)
+            uv[2 * system->vertices[l] + k] = x[l];
+    } else if (pcg_solve(system, solver, factor, k, uv)) {
+        solver->backoff = 1;
+    } else {
+        solver->failed = 1;
+        solver->direct_runs = solver->backoff;
+        solver->backoff = solver->backoff < 16 ? 2 * solver->backoff : 16;
+        return CHOLMOD_OK;
+    }
+    if (state->project_grain && !solver->response_ready)
+        return grain_response(system, solver, factor);
+    return CHOLMOD_OK;
+}
+
+/* Records the first failing panel of a parallel phase. */
+static void note_failure(int status, int32_t panel, int *failed_status, int32_t *failed_panel)
+{
+    if (status == CHOLMOD_OK)
+        return;
+#pragma omp critical(pz_textile_failure)
+    if (*failed_panel < 0 || panel < *failed_panel) {
+        *failed_panel = panel;
+        *failed_status = status;
+    }
+}
+
+/*
+ * The global step in three parallel phases over the 2 x panels coordinate
+ * systems: assembly, the factorizations this iteration needs, the solves.
+ * The local step is complete before any coordinate is overwritten, each
+ * task writes only its own panel's coordinate, and no factor changes while
+ * the solves read them: no races, and the same result for any thread count.
+ */
 static pz_status global_step(textile_state *state, double *uv, pz_ctx *ctx)
 {
     int32_t tasks = 2 * state->pattern->panel_count;
     int failed_status = CHOLMOD_OK;
     int32_t failed_panel = -1;
-    /* The local step is complete before any coordinate is overwritten, and
-     * each task writes only its own panel's coordinate: no races on uv. */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
-    for (int32_t task = 0; task < tasks; ++task) {
-        int st = solve_coordinate(state, task / 2, task % 2, uv);
-        if (st != CHOLMOD_OK) {
-#pragma omp critical(pz_textile_failure)
-            if (failed_panel < 0) {
-                failed_panel = task / 2;
-                failed_status = st;
-            }
+    for (int32_t task = 0; task < tasks; ++task)
+        assemble_coordinate(state, task / 2, task % 2, uv);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+    for (int32_t task = 0; task < tasks; ++task)
+        note_failure(factorize_when_needed(&state->panels[task / 2], task % 2), task / 2, &failed_status,
+                     &failed_panel);
+    int retry = 0;
+    if (failed_panel < 0) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel) reduction(| : retry)
+        for (int32_t task = 0; task < tasks; ++task) {
+            note_failure(solve_coordinate(state, task / 2, task % 2, uv), task / 2, &failed_status, &failed_panel);
+            retry |= state->panels[task / 2].solver[task % 2].failed;
+        }
+    }
+    /* PCG steps that failed: factorize and solve directly, after every
+     * solve that might read the factor is done. */
+    if (retry && failed_panel < 0) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+        for (int32_t task = 0; task < tasks; ++task) {
+            panel_system *system = &state->panels[task / 2];
+            if (!system->solver[task % 2].failed)
+                continue;
+            system->solver[task % 2].failed = 0;
+            int st = factorize_when_needed(system, task % 2);
+            note_failure(st ? st : solve_coordinate(state, task / 2, task % 2, uv), task / 2, &failed_status,
+                         &failed_panel);
         }
     }
     if (failed_panel < 0)
@@ -1725,6 +1817,17 @@ static int32_t demote_terms(textile_state *state, pz_textile_result *result)
     return demoted;
 }
 
+/* The next global step factorizes every coordinate's own matrix and solves
+ * it directly (v stops borrowing u's factor). */
+static void demand_exact_solves(textile_state *state)
+{
+    for (int32_t p = 0; p < state->pattern->panel_count; ++p)
+        for (int k = 0; k < 2; ++k) {
+            state->panels[p].solver[k].refactor = 1;
+            state->panels[p].solver[k].borrowing = 0;
+        }
+}
+
 /*
  * Up to `iterations` local/global steps from uv (of energy *energy, already
  * evaluated into control), each followed by the line search; with a strain
@@ -1738,6 +1841,7 @@ static pz_status iterate(textile_state *state, step_control *control, const pz_t
                          pz_ctx *ctx)
 {
     const pz_pattern *pattern = state->pattern;
+    int exact_retried = 0;
     for (int it = 0; it < iterations; ++it) {
         double previous = *energy;
         memcpy(control->previous_uv, uv, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
@@ -1760,14 +1864,17 @@ static pz_status iterate(textile_state *state, step_control *control, const pz_t
             reweighted = 1;
         }
         /* From the first backtracked step on, steps keep the grain
-         * (project_grain_turn); a stall without that is retried with it. */
-        if (!state->project_grain && damped) {
+         * (project_grain_turn). A step that no fraction of could lower the
+         * energy is retried once with that and with exact solves (fresh
+         * factors, v's own) before the iteration gives up. */
+        if (damped)
             state->project_grain = 1;
-            if (stalled) {
-                *energy = evaluate(state, uv);
-                panel_figures(state, control->energy, control->flipped);
-                continue;
-            }
+        if (stalled && damped && !exact_retried) {
+            exact_retried = 1;
+            demand_exact_solves(state);
+            *energy = evaluate(state, uv);
+            panel_figures(state, control->energy, control->flipped);
+            continue;
         }
         if (stalled || (!reweighted && fabs(*energy - previous) <= tolerance * previous)) {
             outcome->converged = 1;
