@@ -11,7 +11,8 @@
  *  2. Local step, per triangle, from the current 2D triangle ABC and the 3D
  *     triangle A'B'C' (in its own orthonormal frame), for the rest pose and,
  *     with use_poses, every pose, the results averaged (Sec. 4.3, last
- *     paragraph: only right-hand sides depend on the 3D shape):
+ *     paragraph: only right-hand sides depend on the 3D shape; the energy
+ *     is then the mean of the poses' energies, whose step that is):
  *       - stretch (Eqs. 2-5): the barycentric differences of G_u = G + (1,0)
  *         and G are the u-derivatives of the hat functions on ABC,
  *         c_u = d(alpha, beta, gamma)/du, likewise c_v; s_u = |sum c_u,i X'_i|
