@@ -79,10 +79,11 @@
  * solves, two products) and an occasional numeric factorization. Memory:
  * per face 3 doubles per pose (the 3D frame coordinates), 2 (the grain in
  * the frame), the local-step output (18 doubles) and 6 matrix slots; per
- * panel two CSC matrices and two factors. Failure modes: PZ_ERR_DATA (a panel that is not a
- * disk, a seam vertex out of range), PZ_ERR_NOMEM, PZ_ERR_INTERNAL (CHOLMOD
- * reports a matrix that is not positive definite: should not happen since
- * the regularized system is SPD).
+ * panel two CSC matrices and one or two factors (v borrows u's on large
+ * panels). Failure modes: PZ_ERR_DATA (a panel that is not a disk, a seam
+ * vertex out of range), PZ_ERR_NOMEM, PZ_ERR_INTERNAL (CHOLMOD reports a
+ * matrix that is not positive definite: should not happen since the
+ * regularized system is SPD).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -155,7 +156,6 @@ typedef struct panel_system {
     coordinate_solver solver[2];
 } panel_system;
 
-/* The local step's output for one face. */
 /* The local step's output for one face: its share of the global step's
  * system for coordinate k (face_system), so the assembly is a scatter. */
 typedef struct face_terms {
@@ -398,7 +398,8 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
     }
     if (su->factor && sv->matrix)
         sv->factor = cholmod_copy_factor(su->factor, &sv->common);
-    for (int k = 0; k < 2 && sv->factor; ++k) {
+    int allocated = sv->factor != NULL;
+    for (int k = 0; k < 2 && allocated; ++k) {
         coordinate_solver *s = &system->solver[k];
         s->backoff = 1;
         s->borrowing = k == 1 && s->max_steps >= BORROW_MIN_STEPS;
@@ -408,11 +409,9 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
         s->current = malloc((size_t)n * sizeof(double) + 1);
         s->grain_gradient = malloc((size_t)n * sizeof(double) + 1);
         s->grain_response = calloc((size_t)n + 1, sizeof(double));
-        if (!s->rhs || !s->residual || !s->product || !s->current || !s->grain_gradient ||
-            !s->grain_response)
-            break;
+        allocated = s->rhs && s->residual && s->product && s->current && s->grain_gradient && s->grain_response;
     }
-    if (!su->grain_response || !sv->grain_response) {
+    if (!allocated) {
         snprintf(message, message_size, "textile: panel %d: out of memory in the symbolic analysis", panel);
         return PZ_ERR_NOMEM;
     }
