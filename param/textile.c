@@ -1659,7 +1659,11 @@ static double line_search(textile_state *state, step_control *control, double en
     memcpy(control->full_uv, uv, bytes);
     *bounded = 0;
     for (int32_t p = 0; p < np; ++p) {
-        control->step[p] = fmin(1, FLIP_MARGIN * flip_free_step(state, p, control->previous_uv, control->full_uv));
+        double step = FLIP_MARGIN * flip_free_step(state, p, control->previous_uv, control->full_uv);
+        /* A bound below the shortest backtracked step (a face nearly
+         * collapsed and squeezed further by any step) would freeze the
+         * panel: the backtracking alone decides then, as it did before. */
+        control->step[p] = step < 1 && step >= 1.0 / (1 << MAX_STEP_HALVINGS) ? step : 1;
         *bounded |= control->step[p] < 1;
     }
     if (*bounded)
