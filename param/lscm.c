@@ -14,7 +14,8 @@
  * similarities (4 dimensions), so two boundary vertices far apart are pinned
  * to (0, 0) and (d, 0), d their 3D distance (Levy's choice). The normal
  * equations of the remaining 2 (n - 2) unknowns (u and v interleaved) are
- * SPD and are solved with one simplicial CHOLMOD factorization.
+ * SPD and are solved with one CHOLMOD factorization (supernodal from about
+ * 20K faces, pz_param_factorize).
  *
  * Grain (pietroni2022 Sec. 4.3, "Grain alignment"): per triangle the 3D
  * grain axis is projected onto the triangle plane and carried into 2D by the
@@ -45,6 +46,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <omp.h>
 
 #define LSCM_GAP_MM 20.0
 #define LSCM_HALF_PI 1.57079632679489661923
@@ -353,6 +355,26 @@ cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions
     return factor;
 }
 
+/*
+ * cholmod_factorize with OpenMP's dynamic adjustment of team sizes on.
+ * CHOLMOD's supernodal factorization (SuiteSparse 5.12) opens its parallel
+ * regions with a fixed num_threads(CHOLMOD_OMP_NUM_THREADS), 4: on a 2-core
+ * machine, and more so a busy one, those threads mostly spin at barriers
+ * (200K faces: the LSCM factorization took 2.8 s of CPU instead of 0.5).
+ * With dyn-var set, libgomp caps each team at the cores the load average
+ * leaves free. The regions only clear and assemble disjoint entries, so the
+ * factor does not depend on the team size. Shared with param/textile.c.
+ * Returns cholmod_factorize's result (common->status says why it failed).
+ */
+int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_common *common)
+{
+    int dynamic = omp_get_dynamic();
+    omp_set_dynamic(1);
+    int ok = cholmod_factorize(matrix, factor, common);
+    omp_set_dynamic(dynamic);
+    return ok;
+}
+
 /* ------------------------------------------------------------------------ */
 /* LSCM of one disk                                                          */
 /* ------------------------------------------------------------------------ */
@@ -433,7 +455,7 @@ static pz_status lscm_solve(const pz_mesh *disk, const int32_t pins[2], double *
 
     cholmod_common common;
     cholmod_start(&common);
-    common.supernodal = CHOLMOD_SIMPLICIAL;
+    common.supernodal = CHOLMOD_AUTO; /* supernodal from about 20K faces: docs/param.md, "Speed" */
     size_t n = (size_t)free_count;
     /* Lower triangle (stype -1) of the Hermitian matrix: 6 entries per face at most. */
     cholmod_triplet *triplet = cholmod_allocate_triplet(n, n, (size_t)nf * 6, -1, CHOLMOD_COMPLEX, &common);
@@ -496,7 +518,7 @@ static pz_status lscm_solve(const pz_mesh *disk, const int32_t pins[2], double *
     factor = pz_param_analyze(matrix, disk->positions, vertex_of, &common);
     free(vertex_of);
     if (factor)
-        cholmod_factorize(matrix, factor, &common);
+        pz_param_factorize(matrix, factor, &common);
     if (!factor || common.status != CHOLMOD_OK) {
         status = common.status == CHOLMOD_OUT_OF_MEMORY ? pz_error(ctx, PZ_ERR_NOMEM, "lscm: out of memory")
                                                         : pz_error(ctx, PZ_ERR_INTERNAL,

@@ -179,6 +179,7 @@ typedef struct pz_textile_result {
     double init_ms;           /* LSCM initialization */
     double solve_ms;          /* all iterations */
     double iteration_ms;      /* mean per iteration */
+    int bounded_steps;        /* global steps shortened before any evaluation so no face flips on the way (docs/param.md) */
     int damped_steps;         /* global steps shortened (backtracked) to keep the energy from rising or faces from flipping */
     int32_t length_only_seams; /* seams held to equal length only (seam_mirror_tolerance, strain_limit) */
     int32_t length_only_darts; /* darts held to equal legs without axis symmetry (strain_limit) */

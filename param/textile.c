@@ -11,12 +11,15 @@
  *  2. Local step, per triangle, from the current 2D triangle ABC and the 3D
  *     triangle A'B'C' (in its own orthonormal frame), for the rest pose and,
  *     with use_poses, every pose, the results averaged (Sec. 4.3, last
- *     paragraph: only right-hand sides depend on the 3D shape):
+ *     paragraph: only right-hand sides depend on the 3D shape; the energy
+ *     is then the mean of the poses' energies, whose step that is):
  *       - stretch (Eqs. 2-5): the barycentric differences of G_u = G + (1,0)
  *         and G are the u-derivatives of the hat functions on ABC,
  *         c_u = d(alpha, beta, gamma)/du, likewise c_v; s_u = |sum c_u,i X'_i|
  *         and s_v are the 3D lengths of the images of the unit grain vectors.
- *         Residuals s_u - c_u . u and s_v - c_v . v.
+ *         Residuals s_u - c_u . u and s_v - c_v . v, each row weighted by
+ *         s_k and a shear term added so the global step's slope is that of
+ *         Eq. 10 (face_system: "consistent stretch steps").
  *       - rigidity (Eq. 6): R = the best rotation of A'B'C' onto ABC
  *         (2x2 Procrustes in closed form), edge targets R (X'_j - X'_i).
  *     Seams (Eqs. 7-8): the best-fit reflection M (Procrustes with det = -1,
@@ -33,11 +36,13 @@
  *     adjacency) but not their values (c_u != c_v), so each has its own
  *     matrix and factor; CHOLMOD's symbolic analysis is done once per panel
  *     at setup and copied. The matrix changes every iteration (c depends on
- *     the 2D triangles), but slowly: each system is solved by conjugate
+ *     the 2D triangles), but slowly: each system takes one step of conjugate
  *     gradients preconditioned with the factor of an earlier iteration's
- *     matrix, and refactorized (numerically only) when that factor has gone
+ *     matrix, refactorized (numerically only) when that factor has gone
  *     stale (pcg_solve). Panels are independent given the seam targets, so
- *     the 2 x panels systems are solved in parallel (OpenMP).
+ *     the 2 x panels systems are solved in parallel (OpenMP). Once a step
+ *     has needed backtracking, the step is projected so it does not turn the
+ *     panels (project_grain_turn: step 1 would turn them back).
  *
  * Scales (where the paper is silent; docs/param.md): the stretch residual is
  * dimensionless, so each triangle's stretch term is weighted by its 3D area,
@@ -53,13 +58,14 @@
  * step, and with its neighbours it overshoots; seams and ARAP alone would be
  * a proper majorization). Seen on the diffavatar shirt: the energy went
  * 640K -> 31K -> 19M at the last step, strain 174, flipped faces. So every
- * global step is followed by a backtracking: the new iterate is aligned and
- * evaluated; it is kept when the total energy did not increase and no panel
- * has more collapsed or mirrored faces than the LSCM start had; otherwise the
- * panels that got worse take half their step (all panels when none did on
- * its own: seams couple them), at most MAX_STEP_HALVINGS times, after which
- * the previous iterate is kept and the iteration stops. The returned energy
- * is therefore never above the start's, and the energies reported through
+ * global step is first shortened, per panel, to 0.8 of the way to the first
+ * face that would flip (flip_free_step), then aligned and evaluated; it is
+ * kept when the total energy did not increase and no panel has more
+ * collapsed or mirrored faces than the LSCM start had; otherwise the panels
+ * that got worse take half their step (all panels when none did on its own:
+ * seams couple them), at most MAX_STEP_HALVINGS times, after which the
+ * previous iterate is kept and the iteration stops. The returned energy is
+ * therefore never above the start's, and the energies reported through
  * options->on_iteration never increase.
  *
  * Stopping: after `iterations` global steps (20), when the energy changed by
@@ -68,14 +74,16 @@
  * follows.
  *
  * Cost per iteration: O(F) for the local step and the assembly (a scatter
- * into precomputed CSC slots, no allocation), plus a few triangular solves
- * per coordinate and an occasional numeric factorization. Memory: per face
- * 3 doubles per pose (the 3D frame coordinates), 2 (the grain in the frame),
- * the local-step output (14 doubles) and 6 matrix slots; per panel two CSC
- * matrices and two factors. Failure modes: PZ_ERR_DATA (a panel that is not a
- * disk, a seam vertex out of range), PZ_ERR_NOMEM, PZ_ERR_INTERNAL (CHOLMOD
- * reports a matrix that is not positive definite: should not happen since
- * the regularized system is SPD).
+ * of each face's precomputed share into precomputed CSC slots, no
+ * allocation), plus one preconditioned step per coordinate (two triangular
+ * solves, two products) and an occasional numeric factorization. Memory:
+ * per face 3 doubles per pose (the 3D frame coordinates), 2 (the grain in
+ * the frame), the local-step output (18 doubles) and 6 matrix slots; per
+ * panel two CSC matrices and one or two factors (v borrows u's on large
+ * panels). Failure modes: PZ_ERR_DATA (a panel that is not a disk, a seam
+ * vertex out of range), PZ_ERR_NOMEM, PZ_ERR_INTERNAL (CHOLMOD reports a
+ * matrix that is not positive definite: should not happen since the
+ * regularized system is SPD).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -87,9 +95,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Bounds of the PCG step budget (see pcg_solve). */
+/* Bounds of a factorization's cost in PCG steps (see pcg_solve). */
 #define PCG_MIN_STEPS 4
 #define PCG_MAX_STEPS 60
+/* From this cost on, v starts with u's factor as its preconditioner instead
+ * of its own (factorize_when_needed): at 200K faces (60) that saved one
+ * 0.3 s factorization for energies 2e-4 higher after 20 steps; below, the
+ * saving is small and the trajectories of the test meshes changed more. */
+#define BORROW_MIN_STEPS 40
 #define FACTOR_FLOP_COST 2.0
 
 /* Threads pay only when every parallel region has milliseconds of work:
@@ -108,6 +121,7 @@ pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int
 void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const int32_t *order, double *uv);
 cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions, const int32_t *vertex_of,
                                  cholmod_common *common);
+int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_common *common);
 
 /* One n x n SPD system of one panel and one coordinate, with its own CHOLMOD
  * workspace (CHOLMOD commons are not shared between threads). */
@@ -118,12 +132,18 @@ typedef struct coordinate_solver {
     cholmod_factor *factor;   /* symbolic once, numeric every iteration */
     cholmod_dense *rhs, *solution, *work_y, *work_e;
     cholmod_dense *residual;  /* PCG: r, the right-hand side of the preconditioner solve */
-    double *direction, *product, *current; /* PCG: p, A p and the iterate */
+    double *product, *current; /* PCG: A x or A z, and the iterate */
     int factored;             /* the factor holds some earlier matrix's numbers */
+    int borrowing;            /* v only: preconditions with u's factor (until it needs its own) */
+    int fresh;                /* the factor was made from this iteration's matrix: solve directly */
+    int failed;               /* this iteration's PCG step failed (global_step solves it directly) */
     int refactor;             /* 1: factorize before the next solve */
-    int direct_runs;          /* after PCG failed: solve directly this many more times */
+    int direct_runs;          /* after PCG failed: factorize and solve directly this many more times */
     int backoff;              /* the next such pause (doubles on repeated failures) */
-    int max_steps;            /* PCG gives up after this many steps (about one factorization's cost) */
+    int max_steps;            /* what one factorization costs in PCG steps (flop counts, pcg_solve) */
+    double *grain_gradient;   /* the panel's grain_gradient for this coordinate at the last assembly */
+    double *grain_response;   /* A^-1 of it (grain_response), computed once per factorization */
+    int response_ready;       /* grain_response belongs to the current factor */
 } coordinate_solver;
 
 typedef struct panel_system {
@@ -136,11 +156,11 @@ typedef struct panel_system {
     coordinate_solver solver[2];
 } panel_system;
 
-/* The local step's output for one face. */
+/* The local step's output for one face: its share of the global step's
+ * system for coordinate k (face_system), so the assembly is a scatter. */
 typedef struct face_terms {
-    double c[2][3];           /* stretch coefficients for u and v */
-    double s[2];              /* stretch targets s_u, s_v (pose average) */
-    double t[3][2];           /* rigid edge targets for edges 0->1, 1->2, 2->0 */
+    double value[2][6];       /* matrix entries (0,0) (1,1) (2,2) (0,1) (0,2) (1,2) of its corners */
+    double rhs[2][3];         /* right-hand side at its corners */
 } face_terms;
 
 typedef struct textile_state {
@@ -160,6 +180,8 @@ typedef struct textile_state {
     uint8_t *face_flipped;    /* face_count: 1 when its 2D triangle is collapsed or mirrored */
     int32_t *vertex_panel;    /* vertex_count */
     double *panel_pull;       /* panel_count: seam and dart energy of the panel's vertices */
+    double *grain_norm;       /* panel_count: |S| of panel_grain_angle at the last evaluation */
+    int project_grain;        /* 1: project_grain_turn after every global step */
     int32_t *vertex_local;    /* vertex_count: index within its panel */
     double *pull_weight;      /* vertex_count: summed seam/dart weights */
     double *pull_target;      /* vertex_count x 2: weighted sums of seam/dart targets */
@@ -205,9 +227,10 @@ static void solver_free(coordinate_solver *solver)
     cholmod_free_dense(&solver->solution, &solver->common);
     cholmod_free_dense(&solver->rhs, &solver->common);
     cholmod_free_dense(&solver->residual, &solver->common);
-    free(solver->direction);
     free(solver->product);
     free(solver->current);
+    free(solver->grain_gradient);
+    free(solver->grain_response);
     cholmod_free_factor(&solver->factor, &solver->common);
     cholmod_free_sparse(&solver->matrix, &solver->common);
     cholmod_finish(&solver->common);
@@ -234,6 +257,7 @@ static void state_free(textile_state *state)
     free(state->face_flipped);
     free(state->vertex_panel);
     free(state->panel_pull);
+    free(state->grain_norm);
     free(state->vertex_local);
     free(state->pull_weight);
     free(state->pull_target);
@@ -321,7 +345,7 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
     for (int k = 0; k < 2; ++k) {
         cholmod_start(&system->solver[k].common);
         system->solver[k].started = 1;
-        system->solver[k].common.supernodal = CHOLMOD_SIMPLICIAL;
+        system->solver[k].common.supernodal = CHOLMOD_AUTO; /* as in lscm.c */
     }
     coordinate_solver *su = &system->solver[0], *sv = &system->solver[1];
     cholmod_triplet *triplet = cholmod_allocate_triplet(n, n, (size_t)6 * count + system->segment_count, 1,
@@ -378,18 +402,20 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
     }
     if (su->factor && sv->matrix)
         sv->factor = cholmod_copy_factor(su->factor, &sv->common);
-    for (int k = 0; k < 2 && sv->factor; ++k) {
+    int allocated = sv->factor != NULL;
+    for (int k = 0; k < 2 && allocated; ++k) {
         coordinate_solver *s = &system->solver[k];
         s->backoff = 1;
+        s->borrowing = k == 1 && s->max_steps >= BORROW_MIN_STEPS;
         s->rhs = cholmod_zeros(n, 1, CHOLMOD_REAL, &s->common);
         s->residual = cholmod_zeros(n, 1, CHOLMOD_REAL, &s->common);
-        s->direction = malloc((size_t)n * sizeof(double) + 1);
         s->product = malloc((size_t)n * sizeof(double) + 1);
         s->current = malloc((size_t)n * sizeof(double) + 1);
-        if (!s->rhs || !s->residual || !s->direction || !s->product || !s->current)
-            break;
+        s->grain_gradient = malloc((size_t)n * sizeof(double) + 1);
+        s->grain_response = calloc((size_t)n + 1, sizeof(double));
+        allocated = s->rhs && s->residual && s->product && s->current && s->grain_gradient && s->grain_response;
     }
-    if (!su->current || !sv->current) {
+    if (!allocated) {
         snprintf(message, message_size, "textile: panel %d: out of memory in the symbolic analysis", panel);
         return PZ_ERR_NOMEM;
     }
@@ -713,9 +739,10 @@ static pz_status state_setup(textile_state *state, const double *uv, int32_t *le
     state->face_flipped = malloc(nf + 1);
     state->vertex_panel = malloc(nv * sizeof(int32_t) + 1);
     state->panel_pull = malloc((size_t)pattern->panel_count * sizeof(double) + 1);
+    state->grain_norm = calloc((size_t)pattern->panel_count + 1, sizeof(double));
     if (!state->frames || !state->areas || !state->grain_local || !state->terms || !state->vertex_local || !state->pull_weight ||
         !state->pull_target || !state->panels || !state->face_energy || !state->face_flipped || !state->vertex_panel ||
-        !state->panel_pull)
+        !state->panel_pull || !state->grain_norm)
         return pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
     for (size_t v = 0; v < nv; ++v)
         state->vertex_local[v] = -1;
@@ -760,13 +787,71 @@ static pz_status state_setup(textile_state *state, const double *uv, int32_t *le
 /* Local step                                                                */
 /* ------------------------------------------------------------------------ */
 
-/* Stretch coefficients, targets and rigid edge targets of face f; returns its
- * energy at the current uv. */
+/*
+ * Face f's share of coordinate k's system in the global step: the rigid
+ * edge targets t (Eq. 6) and the stretch term (docs/param.md, "Consistent
+ * stretch steps"). Eq. 10 evaluates w A (s_k - 1)^2, and with the other
+ * coordinate fixed s_k of the new triangle is exactly s_k / a, a = c_k .
+ * x_new (c_k: the old triangle's hat gradients), so the face's term is
+ * w A (s_k / a - 1)^2. The paper's row w A (s_k - a)^2 has the right
+ * minimizer (a = s_k) but its slope at a = 1 is 1 / s_k of the true one, so
+ * the local/global map stops where the weighted slopes balance, not at a
+ * stationary point of Eq. 10: near that fixed point every full step raised
+ * the energy and was backtracked. Weighting the row by s_k makes the slopes
+ * equal (the minimizer stays a = s_k). The other coordinate's term depends
+ * on coordinate k through the shear, d s_o = -(J_1 . J_2 / s_o) dT_ko (T: the
+ * new triangle in the old one's frame, T_ko = c_o . x_k,new): `cross` is its
+ * slope, `cross_weight` its Gauss-Newton curvature w A (J_1 . J_2 / s_o)^2
+ * along c_o (without it the force, scaled up by the strain goal's weights,
+ * threw steps far off: most steps were backtracked on the shared garments).
+ * Far from the goal (s_k outside [1/STRETCH_STEP_RANGE, STRETCH_STEP_RANGE];
+ * the LSCM start of the face scan has faces squeezed 1000x) the row asks for
+ * at most that factor per step (a trust region) and the shear terms are
+ * left out.
+ */
+#define STRETCH_STEP_RANGE 2.0
+
+/* Per coordinate k, over the poses used: the mean of s_k, of s_k^2, of
+ * (s_k - 1) J_1 . J_2 / s_k (the shear slope) and of (J_1 . J_2 / s_k)^2. */
+typedef struct stretch_figures {
+    double s[2], second[2], slope[2], curvature[2];
+} stretch_figures;
+
+static void face_system(const double c[2][3], const stretch_figures *figures, const double t[3][2],
+                        double stretch_weight, double w_rigid, int k, face_terms *terms)
+{
+    static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
+    int o = 1 - k;
+    const double *s = figures->s;
+    double low = 1 / STRETCH_STEP_RANGE;
+    double clamped = s[k] > STRETCH_STEP_RANGE ? STRETCH_STEP_RANGE : s[k] < low ? low : s[k];
+    int near = clamped == s[k] && s[o] <= STRETCH_STEP_RANGE && s[o] >= low;
+    double row_weight = stretch_weight * clamped;
+    /* With poses the row's slope is the mean of the poses' slopes:
+     * sum_p s_p (s_p - 1) = P s (s + var / s - 1); var = 0 for one pose. */
+    double target = near ? s[k] + (figures->second[k] - s[k] * s[k]) / s[k] : clamped;
+    double cross = near ? stretch_weight * figures->slope[o] : 0;
+    double cross_weight = near ? stretch_weight * figures->curvature[o] : 0;
+    for (int e = 0; e < 6; ++e) {
+        int a = pair[e][0], b = pair[e][1];
+        terms->value[k][e] = row_weight * c[k][a] * c[k][b] + cross_weight * c[o][a] * c[o][b] +
+                             (a == b ? 2 * w_rigid : -w_rigid);
+    }
+    for (int a = 0; a < 3; ++a)
+        terms->rhs[k][a] = row_weight * target * c[k][a] + cross * c[o][a];
+    for (int e = 0; e < 3; ++e) {
+        terms->rhs[k][(e + 1) % 3] += w_rigid * t[e][k];
+        terms->rhs[k][e] -= w_rigid * t[e][k];
+    }
+}
+
+/* Stretch coefficients and targets, rigid edge targets of face f, and from
+ * them its share of the global step (face_system); returns its energy at
+ * the current uv. */
 static double local_face(const textile_state *state, int32_t f, const double *uv)
 {
     const int32_t *face = state->pattern->mesh->faces + 3 * f;
-    face_terms *terms = &state->terms[f];
-    double q[3][2];
+    double q[3][2], c[2][3];
     for (int i = 0; i < 3; ++i) {
         q[i][0] = uv[2 * face[i]];
         q[i][1] = uv[2 * face[i] + 1];
@@ -780,8 +865,8 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
     int stretch = twice_area > 1e-12 * area_3d && area_3d > 0;
     for (int i = 0; i < 3; ++i) {
         int j = (i + 1) % 3, k = (i + 2) % 3;
-        terms->c[0][i] = stretch ? (q[j][1] - q[k][1]) / twice_area : 0;
-        terms->c[1][i] = stretch ? (q[k][0] - q[j][0]) / twice_area : 0;
+        c[0][i] = stretch ? (q[j][1] - q[k][1]) / twice_area : 0;
+        c[1][i] = stretch ? (q[k][0] - q[j][0]) / twice_area : 0;
     }
     double qe[3][2];
     for (int e = 0; e < 3; ++e) {
@@ -789,18 +874,33 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
         qe[e][0] = q[j][0] - q[e][0];
         qe[e][1] = q[j][1] - q[e][1];
     }
-    double s[2] = {0, 0}, t[3][2] = {{0, 0}, {0, 0}, {0, 0}};
+    double image[2] = {0, 0}; /* c_k . q: 1 up to rounding (c_k are the hat functions' k-derivatives) */
+    for (int k = 0; k < 2; ++k)
+        for (int i = 0; i < 3; ++i)
+            image[k] += c[k][i] * q[i][k];
+    stretch_figures figures = {{0, 0}, {0, 0}, {0, 0}, {0, 0}};
+    double t[3][2] = {{0, 0}, {0, 0}, {0, 0}}, stretch_sum[2] = {0, 0}, rigid_sum = 0;
     int32_t poses = state->pose_total;
     for (int32_t p = 0; p < poses; ++p) {
         const double *frame = state->frames + ((size_t)f * poses + p) * 3;
         double P[3][2] = {{0, 0}, {frame[0], 0}, {frame[1], frame[2]}};
+        double thread[2][2], length[2]; /* J_k in the 3D frame, |J_k| */
         for (int k = 0; k < 2; ++k) {
-            double gx = 0, gy = 0;
+            thread[k][0] = thread[k][1] = 0;
             for (int i = 0; i < 3; ++i) {
-                gx += terms->c[k][i] * P[i][0];
-                gy += terms->c[k][i] * P[i][1];
+                thread[k][0] += c[k][i] * P[i][0];
+                thread[k][1] += c[k][i] * P[i][1];
             }
-            s[k] += sqrt(gx * gx + gy * gy);
+            length[k] = sqrt(thread[k][0] * thread[k][0] + thread[k][1] * thread[k][1]);
+        }
+        double threads_dot = thread[0][0] * thread[1][0] + thread[0][1] * thread[1][1];
+        for (int k = 0; k < 2; ++k) {
+            double shear = length[k] > 0 ? threads_dot / length[k] : 0;
+            figures.s[k] += length[k];
+            figures.second[k] += length[k] * length[k];
+            figures.slope[k] += (length[k] - 1) * shear;
+            figures.curvature[k] += shear * shear;
+            stretch_sum[k] += (length[k] - image[k]) * (length[k] - image[k]);
         }
         double pe[3][2], s00 = 0, s01 = 0, s10 = 0, s11 = 0;
         for (int e = 0; e < 3; ++e) {
@@ -822,32 +922,33 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
             sn = 0;
         }
         for (int e = 0; e < 3; ++e) {
-            t[e][0] += cs * pe[e][0] - sn * pe[e][1];
-            t[e][1] += sn * pe[e][0] + cs * pe[e][1];
+            double target[2] = {cs * pe[e][0] - sn * pe[e][1], sn * pe[e][0] + cs * pe[e][1]};
+            for (int k = 0; k < 2; ++k) {
+                t[e][k] += target[k];
+                rigid_sum += (qe[e][k] - target[k]) * (qe[e][k] - target[k]);
+            }
         }
     }
     double energy = 0, stretch_weight = state->w_stretch * area_3d * (state->stretch_boost ? state->stretch_boost[f] : 1);
     double worst_strain = 0;
     for (int k = 0; k < 2; ++k) {
-        terms->s[k] = s[k] / poses;
+        figures.s[k] /= poses;
+        figures.second[k] /= poses;
+        figures.slope[k] /= poses;
+        figures.curvature[k] /= poses;
         if (stretch) {
-            double image = 0;
-            for (int i = 0; i < 3; ++i)
-                image += terms->c[k][i] * q[i][k];
-            energy += stretch_weight * (terms->s[k] - image) * (terms->s[k] - image);
-            /* image = 1 (c_k are the derivatives of the hat functions along
-             * k), so s_k - 1 is the strain |J_k| - 1 of docs/metrics.md. */
-            worst_strain = fmax(worst_strain, fabs(terms->s[k] - 1));
+            energy += stretch_weight * stretch_sum[k] / poses;
+            /* s_k - 1 is the strain |J_k| - 1 of docs/metrics.md (the mean over poses). */
+            worst_strain = fmax(worst_strain, fabs(figures.s[k] - 1));
         }
+        for (int e = 0; e < 3; ++e)
+            t[e][k] /= poses;
     }
     if (state->face_strain)
         state->face_strain[f] = worst_strain;
-    for (int e = 0; e < 3; ++e)
-        for (int k = 0; k < 2; ++k) {
-            terms->t[e][k] = t[e][k] / poses;
-            double r = qe[e][k] - terms->t[e][k];
-            energy += state->w_rigid * r * r;
-        }
+    energy += state->w_rigid * rigid_sum / poses;
+    for (int k = 0; k < 2; ++k)
+        face_system(c, &figures, t, stretch_weight, state->w_rigid, k, &state->terms[f]);
     state->face_energy[f] = energy;
     state->face_flipped[f] = !(twice_area > 0);
     return energy;
@@ -1010,9 +1111,10 @@ static double local_step(textile_state *state, const double *uv)
 /*
  * The angle that turns panel p's area-weighted projected grain onto +v: the
  * computation of pz_param_grain_angle (lscm.c) with the rest frames and the
- * grain in each frame precomputed at setup.
+ * grain in each frame precomputed at setup. *norm: the length of the
+ * weighted sum (0 when the angle is left at 0).
  */
-static double panel_grain_angle(const textile_state *state, int32_t panel, const double *uv)
+static double panel_grain_angle(const textile_state *state, int32_t panel, const double *uv, double *norm)
 {
     const pz_mesh *mesh = state->pattern->mesh;
     double glen = sqrt(dot3(state->grain, state->grain));
@@ -1041,8 +1143,11 @@ static double panel_grain_angle(const textile_state *state, int32_t panel, const
         sum_u += area * projected * dx / dlen;
         sum_v += area * projected * dy / dlen;
     }
-    if (!(sqrt(sum_u * sum_u + sum_v * sum_v) > 1e-3 * area_sum))
+    *norm = sqrt(sum_u * sum_u + sum_v * sum_v);
+    if (!(*norm > 1e-3 * area_sum)) {
+        *norm = 0;
         return 0;
+    }
     return 1.57079632679489661923 - atan2(sum_v, sum_u);
 }
 
@@ -1078,7 +1183,45 @@ static void align_grain(textile_state *state, double *uv)
     const pz_pattern *pattern = state->pattern;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
     for (int32_t p = 0; p < pattern->panel_count; ++p)
-        rotate_panel(state, p, panel_grain_angle(state, p, uv), uv);
+        rotate_panel(state, p, panel_grain_angle(state, p, uv, &state->grain_norm[p]), uv);
+}
+
+/*
+ * The gradient of panel p's grain angle (panel_grain_angle: theta = pi/2 -
+ * atan2(S_v, S_u), S the weighted sum of the faces' unit 2D grain directions
+ * d / |d|) with respect to coordinate k of its vertices, at an aligned uv (S
+ * along +v, so d theta = dS_u / |S|): per face w (e_u - dhat_u dhat)_k / |d|
+ * times d's coefficient of each corner. gradient: the panel's vertex_count,
+ * written.
+ */
+static void grain_gradient(const textile_state *state, int32_t panel, int k, const double *uv, double *gradient)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    memset(gradient, 0, (size_t)state->panels[panel].vertex_count * sizeof(double));
+    double glen = sqrt(dot3(state->grain, state->grain)), norm = state->grain_norm[panel];
+    if (!(norm > 0))
+        return;
+    for (int32_t i = state->offsets[panel]; i < state->offsets[panel + 1]; ++i) {
+        int32_t f = state->order[i];
+        const int32_t *face = mesh->faces + 3 * f;
+        const double *frame = state->frames + (size_t)f * state->pose_total * 3;
+        double a = state->grain_local[2 * f] / glen, b = state->grain_local[2 * f + 1] / glen;
+        double projected = sqrt(a * a + b * b);
+        if (state->areas[f] <= 0 || projected < 1e-9)
+            continue;
+        /* As in panel_grain_angle: d = (q1 - q0) s + (q2 - q0) t. */
+        double t = b / frame[2], s = (a - frame[1] * t) / frame[0];
+        const double *q0 = uv + 2 * face[0], *q1 = uv + 2 * face[1], *q2 = uv + 2 * face[2];
+        double dx = (q1[0] - q0[0]) * s + (q2[0] - q0[0]) * t, dy = (q1[1] - q0[1]) * s + (q2[1] - q0[1]) * t;
+        double dlen = sqrt(dx * dx + dy * dy);
+        if (!(dlen > 0))
+            continue;
+        double ux = dx / dlen, uy = dy / dlen;
+        double g = state->areas[f] * projected * ((k == 0 ? 1 : 0) - ux * (k == 0 ? ux : uy)) / (dlen * norm);
+        gradient[state->vertex_local[face[1]]] += g * s;
+        gradient[state->vertex_local[face[2]]] += g * t;
+        gradient[state->vertex_local[face[0]]] -= g * (s + t);
+    }
 }
 
 /* ------------------------------------------------------------------------ */
@@ -1103,50 +1246,48 @@ static void symmetric_product(const cholmod_sparse *matrix, const double *x, dou
     }
 }
 
-/* Numeric factorization of the current matrix, then a direct solve. */
-static int direct_solve(panel_system *system, coordinate_solver *solver, int k, double *uv)
+/* z = A^-1 g with the coordinate's current preconditioner, g = its
+ * grain_gradient, for project_grain_turn (the residual vector is free
+ * outside pcg_solve). */
+static int grain_response(const panel_system *system, coordinate_solver *solver, cholmod_factor *factor)
 {
-    cholmod_factorize(solver->matrix, solver->factor, &solver->common);
-    if (solver->common.status != CHOLMOD_OK)
-        return solver->common.status ? solver->common.status : -1;
-    solver->factored = 1;
-    solver->refactor = 0;
-    if (!cholmod_solve2(CHOLMOD_A, solver->factor, solver->rhs, NULL, &solver->solution, NULL, &solver->work_y,
+    memcpy(solver->residual->x, solver->grain_gradient, (size_t)system->vertex_count * sizeof(double));
+    if (!cholmod_solve2(CHOLMOD_A, factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
                         &solver->work_e, &solver->common))
         return solver->common.status ? solver->common.status : -1;
-    const double *x = solver->solution->x;
-    for (int32_t l = 0; l < system->vertex_count; ++l)
-        uv[2 * system->vertices[l] + k] = x[l];
+    memcpy(solver->grain_response, solver->solution->x, (size_t)system->vertex_count * sizeof(double));
+    solver->response_ready = 1;
     return CHOLMOD_OK;
 }
 
 /*
- * Conjugate gradients preconditioned with the factor of an earlier
- * iteration's matrix, warm-started at the current coordinates. The matrix
- * changes only through the stretch coefficients, which settle as the
- * iteration converges, so the old factor is a near-exact inverse and a few
- * steps, triangular solves instead of a factorization, reduce the residual
- * by PCG_REDUCTION from the warm start (or to PCG_TOLERANCE of the
- * right-hand side), or until the decrease of the quadratic still to gain,
- * estimated by r^T M^-1 r, is below PCG_MODEL_TOLERANCE of x^T A x (near
- * convergence the warm start is nearly the solution: 1-2 steps then): the
- * global step need not be exact, the line search checks every step. The step budget is what one factorization costs in
- * PCG steps (flop counts, from about 7 at 1K vertices to 65 at 100K;
- * clamped to 4..60): it returns 0 (uv untouched) when it needs more -- or,
- * from step PCG_MIN_STEPS on, as soon as its mean rate so far predicts it
- * would -- and asks for a refactorization when it needed more than half of
- * it (the factor has gone stale). When the matrix keeps changing too much (large,
- * uneven distortion: the face scan), PCG failures back off exponentially
- * (1, 2, 4, ... direct solves before the next try), so a failing PCG costs
- * at most about as much as the factorizations it was meant to save.
+ * The global step's solve: one step of conjugate gradients preconditioned
+ * with the factor of an earlier iteration's matrix, from the current
+ * coordinates (x + alpha z, z = M^-1 (b - A x), alpha minimizing the
+ * quadratic along z). The matrix changes only through the stretch terms, so
+ * the old factor is nearly A^-1 and one step takes most of the way; the
+ * global step need not be exact (the next local step changes the matrix
+ * again, and the line search checks every step): measured, one step per
+ * iteration reached the same energies as solving to 1e-2 (2-4 steps) in
+ * the same number of iterations (docs/param.md, "Speed"). Nothing is done
+ * when the residual is already below PCG_TOLERANCE of the right-hand side
+ * or r^T M^-1 r below PCG_MODEL_TOLERANCE of x^T A x. The factor is
+ * refreshed for the next iteration when, at the rate of this step, reducing
+ * the residual by PCG_REDUCTION would take more than half of what one
+ * factorization costs in steps (max_steps, from flop counts: about 7 at 1K
+ * vertices, 65 at 100K, clamped to 4..60): it has gone stale. A step that
+ * does not lower the residual returns 0 (uv untouched; solve_coordinate
+ * factorizes and solves directly, and when that keeps happening -- large,
+ * uneven distortion: the face scan -- backs off from PCG exponentially, 1,
+ * 2, 4, ... direct solves before the next try).
  */
 #define PCG_TOLERANCE 1e-8
 #define PCG_REDUCTION 1e-2
 #define PCG_MODEL_TOLERANCE 1e-9
-static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, double *uv)
+static int pcg_solve(const panel_system *system, coordinate_solver *solver, cholmod_factor *factor, int k, double *uv)
 {
     int32_t n = system->vertex_count;
-    double *b = solver->rhs->x, *r = solver->residual->x, *p = solver->direction, *ap = solver->product;
+    double *b = solver->rhs->x, *r = solver->residual->x, *ap = solver->product;
     /* The iterate lives in uv's column k; gather it into `current`. */
     double *current = solver->current;
     for (int32_t l = 0; l < n; ++l)
@@ -1159,63 +1300,43 @@ static int pcg_solve(panel_system *system, coordinate_solver *solver, int k, dou
         r_norm += r[l] * r[l];
         scale += current[l] * ap[l];
     }
-    /* r^T M^-1 r estimates what the global step's quadratic can still
-     * decrease; x^T A x is its scale (the size of the targets). */
-    double model_goal = PCG_MODEL_TOLERANCE * scale;
-    double initial_norm = r_norm;
-    double goal = fmax(PCG_TOLERANCE * PCG_TOLERANCE * fmax(b_norm, 1e-300), PCG_REDUCTION * PCG_REDUCTION * r_norm);
+    if (r_norm <= PCG_TOLERANCE * PCG_TOLERANCE * fmax(b_norm, 1e-300))
+        return 1;
+    if (!cholmod_solve2(CHOLMOD_A, factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
+                        &solver->work_e, &solver->common))
+        return 0;
+    const double *z = solver->solution->x;
     double rz = 0;
-    int steps = 0, ok = r_norm <= goal;
-    while (!ok && steps < solver->max_steps) {
-        if (!cholmod_solve2(CHOLMOD_A, solver->factor, solver->residual, NULL, &solver->solution, NULL,
-                            &solver->work_y, &solver->work_e, &solver->common))
-            break;
-        const double *z = solver->solution->x;
-        double rz_new = 0;
-        for (int32_t l = 0; l < n; ++l)
-            rz_new += r[l] * z[l];
-        if (rz_new <= model_goal) {
-            ok = 1;
-            break;
-        }
-        double beta = steps ? rz_new / rz : 0;
-        rz = rz_new;
-        for (int32_t l = 0; l < n; ++l)
-            p[l] = z[l] + beta * p[l];
-        symmetric_product(solver->matrix, p, ap);
-        double pap = 0;
-        for (int32_t l = 0; l < n; ++l)
-            pap += p[l] * ap[l];
-        if (!(pap > 0))
-            break;
-        double alpha = rz / pap;
-        r_norm = 0;
-        for (int32_t l = 0; l < n; ++l) {
-            current[l] += alpha * p[l];
-            r[l] -= alpha * ap[l];
-            r_norm += r[l] * r[l];
-        }
-        ++steps;
-        ok = r_norm <= goal;
-        /* Give up early when, at the mean rate so far, the goal lies beyond
-         * the budget (the face scan's first steps: 31 wasted steps each). */
-        if (!ok && steps >= PCG_MIN_STEPS) {
-            double rate = log(r_norm / initial_norm) / steps;
-            if (!(rate < 0) || steps + log(goal / r_norm) / rate > solver->max_steps)
-                break;
-        }
+    for (int32_t l = 0; l < n; ++l)
+        rz += r[l] * z[l];
+    /* r^T M^-1 r estimates what the quadratic can still decrease; x^T A x
+     * is its scale (the size of the targets). */
+    if (rz <= PCG_MODEL_TOLERANCE * scale)
+        return 1;
+    symmetric_product(solver->matrix, z, ap);
+    double zaz = 0;
+    for (int32_t l = 0; l < n; ++l)
+        zaz += z[l] * ap[l];
+    if (!(zaz > 0))
+        return 0;
+    double alpha = rz / zaz, new_norm = 0;
+    for (int32_t l = 0; l < n; ++l) {
+        double residual = r[l] - alpha * ap[l];
+        new_norm += residual * residual;
     }
-    if (ok)
-        for (int32_t l = 0; l < n; ++l)
-            uv[2 * system->vertices[l] + k] = current[l];
-    if (steps > solver->max_steps / 2)
+    if (!(new_norm < r_norm))
+        return 0;
+    /* Steps to PCG_REDUCTION at this rate (squared norms). */
+    if (2 * log(PCG_REDUCTION) / log(new_norm / r_norm) > solver->max_steps / 2)
         solver->refactor = 1;
-    return ok;
+    for (int32_t l = 0; l < n; ++l)
+        uv[2 * system->vertices[l] + k] = current[l] + alpha * z[l];
+    return 1;
 }
 
-/* Assembles, refactorizes (when needed) and solves coordinate k of one panel; writes the
- * new coordinate into uv. Returns a CHOLMOD status (CHOLMOD_OK = 0). */
-static int solve_coordinate(const textile_state *state, int32_t panel, int k, double *uv)
+/* Assembles coordinate k's system of one panel from the local step's face
+ * shares, the seam segments and the seam and dart pulls at uv. */
+static void assemble_coordinate(const textile_state *state, int32_t panel, int k, const double *uv)
 {
     const pz_mesh *mesh = state->pattern->mesh;
     panel_system *system = &state->panels[panel];
@@ -1228,28 +1349,15 @@ static int solve_coordinate(const textile_state *state, int32_t panel, int k, do
     memset(rhs, 0, (size_t)n * sizeof(double));
     const int32_t *faces = state->order + state->offsets[panel];
     int32_t count = state->offsets[panel + 1] - state->offsets[panel];
-    static const int pair[6][2] = {{0, 0}, {1, 1}, {2, 2}, {0, 1}, {0, 2}, {1, 2}};
-    double w_rigid = state->w_rigid;
     for (int32_t i = 0; i < count; ++i) {
         int32_t f = faces[i];
         const int32_t *face = mesh->faces + 3 * f;
         const face_terms *terms = &state->terms[f];
-        const double *c = terms->c[k];
-        double w = state->w_stretch * state->areas[f] * (state->stretch_boost ? state->stretch_boost[f] : 1);
         const int32_t *slot = system->slots + 6 * i;
-        int32_t local[3] = {state->vertex_local[face[0]], state->vertex_local[face[1]],
-                            state->vertex_local[face[2]]};
-        for (int e = 0; e < 6; ++e) {
-            int a = pair[e][0], b = pair[e][1];
-            values[slot[e]] += w * c[a] * c[b] + (a == b ? 2 * w_rigid : -w_rigid);
-        }
+        for (int e = 0; e < 6; ++e)
+            values[slot[e]] += terms->value[k][e];
         for (int a = 0; a < 3; ++a)
-            rhs[local[a]] += w * terms->s[k] * c[a];
-        for (int e = 0; e < 3; ++e) {
-            double t = w_rigid * terms->t[e][k];
-            rhs[local[(e + 1) % 3]] += t;
-            rhs[local[e]] -= t;
-        }
+            rhs[state->vertex_local[face[a]]] += terms->rhs[k][a];
     }
     for (int32_t i = 0; i < system->segment_count; ++i) {
         int32_t g = system->segment_ids[i];
@@ -1270,37 +1378,123 @@ static int solve_coordinate(const textile_state *state, int32_t panel, int k, do
         values[colp[l + 1] - 1] += state->pull_weight[v] + reg; /* the diagonal ends each upper column */
         rhs[l] += state->pull_target[2 * v + k] + reg * uv[2 * v + k];
     }
-    if (solver->direct_runs > 0) {
-        --solver->direct_runs;
-        return direct_solve(system, solver, k, uv);
-    }
-    if (solver->refactor || !solver->factored)
-        return direct_solve(system, solver, k, uv);
-    if (pcg_solve(system, solver, k, uv)) {
-        solver->backoff = 1;
-        return CHOLMOD_OK;
-    }
-    solver->direct_runs = solver->backoff;
-    solver->backoff = solver->backoff < 16 ? 2 * solver->backoff : 16;
-    return direct_solve(system, solver, k, uv);
+    if (state->project_grain)
+        grain_gradient(state, panel, k, uv, solver->grain_gradient);
 }
 
+/*
+ * Factorizes coordinate k's matrix when this iteration needs it: the first
+ * time (u only: v borrows u's factor until it needs its own), when the
+ * factor went stale or a PCG step failed (pcg_solve), and during the
+ * back-off after failures. Returns a CHOLMOD status.
+ */
+static int factorize_when_needed(panel_system *system, int k)
+{
+    coordinate_solver *solver = &system->solver[k];
+    int needed = solver->direct_runs > 0 || solver->refactor || (!solver->factored && !solver->borrowing);
+    if (!needed)
+        return CHOLMOD_OK;
+    if (solver->direct_runs > 0)
+        --solver->direct_runs;
+    pz_param_factorize(solver->matrix, solver->factor, &solver->common);
+    if (solver->common.status != CHOLMOD_OK)
+        return solver->common.status ? solver->common.status : -1;
+    solver->factored = solver->fresh = 1;
+    solver->refactor = solver->borrowing = 0;
+    solver->response_ready = 0;
+    if (k == 0 && system->solver[1].borrowing)
+        system->solver[1].response_ready = 0;
+    return CHOLMOD_OK;
+}
+
+/*
+ * Solves coordinate k of one panel and writes it into uv: directly with a
+ * factor made this iteration, otherwise one preconditioned step
+ * (pcg_solve). A step that fails leaves uv alone and marks the coordinate
+ * `failed` (global_step then factorizes and solves it directly), and asks
+ * for factorizations in the next iterations too: 1, 2, 4, ... 16 in a row
+ * on repeated failures (large, uneven distortion: the face scan), so a
+ * useless PCG costs at most about what it meant to save. Factors are only
+ * read here, so v can borrow u's while both are solved in parallel.
+ * Returns a CHOLMOD status.
+ */
+static int solve_coordinate(const textile_state *state, int32_t panel, int k, double *uv)
+{
+    panel_system *system = &state->panels[panel];
+    coordinate_solver *solver = &system->solver[k];
+    cholmod_factor *factor = solver->borrowing ? system->solver[0].factor : solver->factor;
+    if (solver->fresh) {
+        solver->fresh = 0;
+        if (!cholmod_solve2(CHOLMOD_A, factor, solver->rhs, NULL, &solver->solution, NULL, &solver->work_y,
+                            &solver->work_e, &solver->common))
+            return solver->common.status ? solver->common.status : -1;
+        const double *x = solver->solution->x;
+        for (int32_t l = 0; l < system->vertex_count; ++l)
+            uv[2 * system->vertices[l] + k] = x[l];
+    } else if (pcg_solve(system, solver, factor, k, uv)) {
+        solver->backoff = 1;
+    } else {
+        solver->failed = 1;
+        solver->direct_runs = solver->backoff;
+        solver->backoff = solver->backoff < 16 ? 2 * solver->backoff : 16;
+        return CHOLMOD_OK;
+    }
+    if (state->project_grain && !solver->response_ready)
+        return grain_response(system, solver, factor);
+    return CHOLMOD_OK;
+}
+
+/* Records the first failing panel of a parallel phase. */
+static void note_failure(int status, int32_t panel, int *failed_status, int32_t *failed_panel)
+{
+    if (status == CHOLMOD_OK)
+        return;
+#pragma omp critical(pz_textile_failure)
+    if (*failed_panel < 0 || panel < *failed_panel) {
+        *failed_panel = panel;
+        *failed_status = status;
+    }
+}
+
+/*
+ * The global step in three parallel phases over the 2 x panels coordinate
+ * systems: assembly, the factorizations this iteration needs, the solves.
+ * The local step is complete before any coordinate is overwritten, each
+ * task writes only its own panel's coordinate, and no factor changes while
+ * the solves read them: no races, and the same result for any thread count.
+ */
 static pz_status global_step(textile_state *state, double *uv, pz_ctx *ctx)
 {
     int32_t tasks = 2 * state->pattern->panel_count;
     int failed_status = CHOLMOD_OK;
     int32_t failed_panel = -1;
-    /* The local step is complete before any coordinate is overwritten, and
-     * each task writes only its own panel's coordinate: no races on uv. */
 #pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
-    for (int32_t task = 0; task < tasks; ++task) {
-        int st = solve_coordinate(state, task / 2, task % 2, uv);
-        if (st != CHOLMOD_OK) {
-#pragma omp critical(pz_textile_failure)
-            if (failed_panel < 0) {
-                failed_panel = task / 2;
-                failed_status = st;
-            }
+    for (int32_t task = 0; task < tasks; ++task)
+        assemble_coordinate(state, task / 2, task % 2, uv);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+    for (int32_t task = 0; task < tasks; ++task)
+        note_failure(factorize_when_needed(&state->panels[task / 2], task % 2), task / 2, &failed_status,
+                     &failed_panel);
+    int retry = 0;
+    if (failed_panel < 0) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel) reduction(| : retry)
+        for (int32_t task = 0; task < tasks; ++task) {
+            note_failure(solve_coordinate(state, task / 2, task % 2, uv), task / 2, &failed_status, &failed_panel);
+            retry |= state->panels[task / 2].solver[task % 2].failed;
+        }
+    }
+    /* PCG steps that failed: factorize and solve directly, after every
+     * solve that might read the factor is done. */
+    if (retry && failed_panel < 0) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+        for (int32_t task = 0; task < tasks; ++task) {
+            panel_system *system = &state->panels[task / 2];
+            if (!system->solver[task % 2].failed)
+                continue;
+            system->solver[task % 2].failed = 0;
+            int st = factorize_when_needed(system, task % 2);
+            note_failure(st ? st : solve_coordinate(state, task / 2, task % 2, uv), task / 2, &failed_status,
+                         &failed_panel);
         }
     }
     if (failed_panel < 0)
@@ -1311,10 +1505,48 @@ static pz_status global_step(textile_state *state, double *uv, pz_ctx *ctx)
                     failed_status);
 }
 
+/*
+ * Grain-constrained steps (docs/param.md). Eq. 10 is not invariant under
+ * rotation, so the global step turns each panel a little towards the
+ * rotation its stretch terms prefer, and align_grain turns it back: near
+ * convergence that raised the energy of every full step (the fixed point of
+ * step-then-align is not a minimum of Eq. 10 among aligned patterns) and the
+ * iteration stalled in backtracking. So the step d = new - old of each panel
+ * is replaced by the minimizer of the global step's quadratic under the
+ * linearized constraint g . d = 0 (g: the gradient of the panel's grain angle,
+ * grain_gradient, both coordinates): d - (g . d / g . z) z with z = A^-1 g,
+ * taken from the last factorization (a stale z only makes the projected step
+ * a little less than optimal; g . d = 0 holds exactly). The step then turns
+ * the panel only to second order, and the iteration's fixed points are the
+ * stationary points of Eq. 10 among aligned patterns.
+ */
+static void project_grain_turn(const textile_state *state, const double *previous, double *uv)
+{
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
+    for (int32_t p = 0; p < state->pattern->panel_count; ++p) {
+        const panel_system *system = &state->panels[p];
+        double turn = 0, response = 0;
+        for (int k = 0; k < 2; ++k)
+            for (int32_t l = 0; l < system->vertex_count; ++l) {
+                size_t i = 2 * (size_t)system->vertices[l] + k;
+                turn += system->solver[k].grain_gradient[l] * (uv[i] - previous[i]);
+                response += system->solver[k].grain_gradient[l] * system->solver[k].grain_response[l];
+            }
+        if (!(response > 0))
+            continue;
+        for (int k = 0; k < 2; ++k)
+            for (int32_t l = 0; l < system->vertex_count; ++l)
+                uv[2 * (size_t)system->vertices[l] + k] -= turn / response * system->solver[k].grain_response[l];
+    }
+}
+
 /* ------------------------------------------------------------------------ */
 /* Monotone steps                                                            */
 /* ------------------------------------------------------------------------ */
 
+/* A step goes at most this fraction of the way to the first face that would
+ * flip (flip_free_step): a face nearly collapsed has a huge stretch term. */
+#define FLIP_MARGIN 0.8
 /* Halvings of a panel's step before the whole step is given up. */
 #define MAX_STEP_HALVINGS 5
 /* Relative slack on "the energy did not increase" (rounding of the sums). */
@@ -1405,6 +1637,53 @@ static void blend(const textile_state *state, const step_control *control, doubl
 }
 
 /*
+ * The largest t > 0 such that no face of `panel` with positive area at
+ * `from` reaches zero area on from + t (to - from) (INFINITY when none does
+ * for any t): twice
+ * the signed area is a quadratic in t, c0 + c1 t + c2 t^2, and t is its
+ * smallest positive root over the faces (Smith and Schaefer 2015, Sec. 4.1,
+ * bound the step of their line search the same way).
+ */
+static double flip_free_step(const textile_state *state, int32_t panel, const double *from, const double *to)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    double best = INFINITY;
+#pragma omp parallel for schedule(static) reduction(min : best) num_threads(state->threads) if (state->within_panel)
+    for (int32_t i = state->offsets[panel]; i < state->offsets[panel + 1]; ++i) {
+        const int32_t *face = mesh->faces + 3 * state->order[i];
+        double e[2][2], d[2][2]; /* edges 0->1 and 0->2 at `from`, and their change */
+        for (int j = 0; j < 2; ++j)
+            for (int k = 0; k < 2; ++k) {
+                e[j][k] = from[2 * face[j + 1] + k] - from[2 * face[0] + k];
+                d[j][k] = to[2 * face[j + 1] + k] - to[2 * face[0] + k] - e[j][k];
+            }
+        double c0 = e[0][0] * e[1][1] - e[0][1] * e[1][0];
+        if (!(c0 > 0))
+            continue;
+        double c1 = e[0][0] * d[1][1] - e[0][1] * d[1][0] + d[0][0] * e[1][1] - d[0][1] * e[1][0];
+        double c2 = d[0][0] * d[1][1] - d[0][1] * d[1][0];
+        double root = INFINITY;
+        if (c2 == 0) {
+            if (c1 < 0)
+                root = -c0 / c1;
+        } else {
+            double discriminant = c1 * c1 - 4 * c2 * c0;
+            if (discriminant >= 0) {
+                /* The two roots without cancellation: q / c2 and c0 / q. */
+                double q = -0.5 * (c1 + copysign(sqrt(discriminant), c1));
+                double r1 = q / c2, r2 = q != 0 ? c0 / q : INFINITY;
+                root = r1 > 0 ? r1 : INFINITY;
+                if (r2 > 0 && r2 < root)
+                    root = r2;
+            }
+        }
+        if (root < best)
+            best = root;
+    }
+    return best;
+}
+
+/*
  * Backtracking after a global step (uv holds its result; control->previous_uv
  * the accepted iterate, of energy `energy`, already evaluated into
  * control->energy / flipped). The step is accepted when the total energy did
@@ -1418,14 +1697,23 @@ static void blend(const textile_state *state, const step_control *control, doubl
  * was given up.
  */
 static double line_search(textile_state *state, step_control *control, double energy, double tolerance, double *uv,
-                          int *damped, int *stalled)
+                          int *bounded, int *damped, int *stalled)
 {
     const pz_pattern *pattern = state->pattern;
     size_t bytes = (size_t)pattern->mesh->vertex_count * 2 * sizeof(double);
     int32_t np = pattern->panel_count;
     memcpy(control->full_uv, uv, bytes);
-    for (int32_t p = 0; p < np; ++p)
-        control->step[p] = 1;
+    *bounded = 0;
+    for (int32_t p = 0; p < np; ++p) {
+        double step = FLIP_MARGIN * flip_free_step(state, p, control->previous_uv, control->full_uv);
+        /* A bound below the shortest backtracked step (a face nearly
+         * collapsed and squeezed further by any step) would freeze the
+         * panel: the backtracking alone decides then, as it did before. */
+        control->step[p] = step < 1 && step >= 1.0 / (1 << MAX_STEP_HALVINGS) ? step : 1;
+        *bounded |= control->step[p] < 1;
+    }
+    if (*bounded)
+        blend(state, control, uv);
     *damped = *stalled = 0;
     for (int halving = 0;; ++halving) {
         double trial = evaluate(state, uv);
@@ -1579,6 +1867,17 @@ static int32_t demote_terms(textile_state *state, pz_textile_result *result)
     return demoted;
 }
 
+/* The next global step factorizes every coordinate's own matrix and solves
+ * it directly (v stops borrowing u's factor). */
+static void demand_exact_solves(textile_state *state)
+{
+    for (int32_t p = 0; p < state->pattern->panel_count; ++p)
+        for (int k = 0; k < 2; ++k) {
+            state->panels[p].solver[k].refactor = 1;
+            state->panels[p].solver[k].borrowing = 0;
+        }
+}
+
 /*
  * Up to `iterations` local/global steps from uv (of energy *energy, already
  * evaluated into control), each followed by the line search; with a strain
@@ -1592,14 +1891,18 @@ static pz_status iterate(textile_state *state, step_control *control, const pz_t
                          pz_ctx *ctx)
 {
     const pz_pattern *pattern = state->pattern;
+    int exact_retried = 0;
     for (int it = 0; it < iterations; ++it) {
         double previous = *energy;
         memcpy(control->previous_uv, uv, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
         pz_status status = global_step(state, uv, ctx);
         if (status)
             return status;
-        int damped, stalled;
-        *energy = line_search(state, control, previous, tolerance, uv, &damped, &stalled);
+        if (state->project_grain)
+            project_grain_turn(state, control->previous_uv, uv);
+        int bounded, damped, stalled;
+        *energy = line_search(state, control, previous, tolerance, uv, &bounded, &damped, &stalled);
+        outcome->bounded_steps += bounded;
         outcome->damped_steps += damped;
         ++outcome->iterations_run;
         if (options && options->on_iteration)
@@ -1609,6 +1912,19 @@ static pz_status iterate(textile_state *state, step_control *control, const pz_t
             *energy = evaluate(state, uv);
             panel_figures(state, uv, control->energy, control->flipped);
             reweighted = 1;
+        }
+        /* From the first backtracked step on, steps keep the grain
+         * (project_grain_turn). A step that no fraction of could lower the
+         * energy is retried once with that and with exact solves (fresh
+         * factors, v's own) before the iteration gives up. */
+        if (damped)
+            state->project_grain = 1;
+        if (stalled && damped && !exact_retried) {
+            exact_retried = 1;
+            demand_exact_solves(state);
+            *energy = evaluate(state, uv);
+            panel_figures(state, control->energy, control->flipped);
+            continue;
         }
         if (stalled || (!reweighted && fabs(*energy - previous) <= tolerance * previous)) {
             outcome->converged = 1;
