@@ -1923,7 +1923,7 @@ static pz_status iterate(textile_state *state, step_control *control, const pz_t
             exact_retried = 1;
             demand_exact_solves(state);
             *energy = evaluate(state, uv);
-            panel_figures(state, control->energy, control->flipped);
+            panel_figures(state, uv, control->energy, control->flipped);
             continue;
         }
         if (stalled || (!reweighted && fabs(*energy - previous) <= tolerance * previous)) {
