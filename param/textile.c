@@ -115,6 +115,19 @@
 #define PARALLEL_MIN_FACES 100000
 #define PARALLEL_MIN_FACES_ASKED 8192
 
+/* Sums over faces or vertices must not depend on the thread count (the same
+ * pattern byte for byte, issue 5; the energies steer the line search): a
+ * range is cut into SUM_BLOCKS fixed blocks, each summed in order by one
+ * thread, and the block sums are added in block order. An OpenMP reduction
+ * would add per-thread partial sums, which round differently per count. */
+#define SUM_BLOCKS 64
+
+/* First index of block `block` of [first, first + count). */
+static int32_t block_start(int32_t first, int32_t count, int block)
+{
+    return first + (int32_t)((int64_t)count * block / SUM_BLOCKS);
+}
+
 /* Shared with param/lscm.c (see there). */
 double pz_param_face_frame(const double *pos, const int32_t *face, double local[3], double e1[3], double e2[3]);
 pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
@@ -765,6 +778,7 @@ static pz_status state_setup(textile_state *state, const double *uv, int32_t *le
     }
     compute_frames(state);
     pz_status failed = PZ_OK;
+    int32_t failed_panel = -1;
     char message[sizeof ctx->error] = "";
 #pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
     for (int32_t p = 0; p < pattern->panel_count; ++p) {
@@ -772,8 +786,9 @@ static pz_status state_setup(textile_state *state, const double *uv, int32_t *le
         pz_status st = panel_setup(state, p, local_message, sizeof local_message);
         if (st) {
 #pragma omp critical(pz_textile_failure)
-            if (!failed) {
+            if (!failed || p < failed_panel) { /* the lowest panel, whatever the timing */
                 failed = st;
+                failed_panel = p;
                 memcpy(message, local_message, sizeof message);
             }
         }
@@ -1078,10 +1093,16 @@ static double local_step(textile_state *state, const double *uv)
 {
     const pz_pattern *pattern = state->pattern;
     int32_t nf = pattern->mesh->face_count;
-    double energy = 0;
-#pragma omp parallel for schedule(static) reduction(+ : energy) num_threads(state->threads) if (state->parallel)
-    for (int32_t f = 0; f < nf; ++f)
-        energy += local_face(state, f, uv);
+    double block_energy[SUM_BLOCKS], energy = 0;
+#pragma omp parallel for schedule(static) num_threads(state->threads) if (state->parallel)
+    for (int block = 0; block < SUM_BLOCKS; ++block) {
+        double sum = 0;
+        for (int32_t f = block_start(0, nf, block); f < block_start(0, nf, block + 1); ++f)
+            sum += local_face(state, f, uv);
+        block_energy[block] = sum;
+    }
+    for (int block = 0; block < SUM_BLOCKS; ++block)
+        energy += block_energy[block];
     /* Seams and darts touch few vertices: serial. */
     memset(state->pull_weight, 0, (size_t)pattern->mesh->vertex_count * sizeof(double));
     memset(state->pull_target, 0, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
@@ -1118,30 +1139,42 @@ static double panel_grain_angle(const textile_state *state, int32_t panel, const
 {
     const pz_mesh *mesh = state->pattern->mesh;
     double glen = sqrt(dot3(state->grain, state->grain));
+    int32_t first = state->offsets[panel], count = state->offsets[panel + 1] - first;
+    double block_sums[SUM_BLOCKS][3]; /* sum_u, sum_v, area_sum */
+#pragma omp parallel for schedule(static) num_threads(state->threads) if (state->within_panel)
+    for (int block = 0; block < SUM_BLOCKS; ++block) {
+        double sum_u = 0, sum_v = 0, area_sum = 0;
+        for (int32_t i = block_start(first, count, block); i < block_start(first, count, block + 1); ++i) {
+            int32_t f = state->order[i];
+            const int32_t *face = mesh->faces + 3 * f;
+            const double *frame = state->frames + (size_t)f * state->pose_total * 3;
+            double area = state->areas[f];
+            if (area <= 0)
+                continue;
+            area_sum += area;
+            double a = state->grain_local[2 * f] / glen, b = state->grain_local[2 * f + 1] / glen;
+            double projected = sqrt(a * a + b * b);
+            if (projected < 1e-9)
+                continue;
+            const double *q0 = uv + 2 * face[0], *q1 = uv + 2 * face[1], *q2 = uv + 2 * face[2];
+            double t = b / frame[2];
+            double s = (a - frame[1] * t) / frame[0];
+            double dx = (q1[0] - q0[0]) * s + (q2[0] - q0[0]) * t, dy = (q1[1] - q0[1]) * s + (q2[1] - q0[1]) * t;
+            double dlen = sqrt(dx * dx + dy * dy);
+            if (!(dlen > 0))
+                continue;
+            sum_u += area * projected * dx / dlen;
+            sum_v += area * projected * dy / dlen;
+        }
+        block_sums[block][0] = sum_u;
+        block_sums[block][1] = sum_v;
+        block_sums[block][2] = area_sum;
+    }
     double sum_u = 0, sum_v = 0, area_sum = 0;
-#pragma omp parallel for schedule(static) reduction(+ : sum_u, sum_v, area_sum) num_threads(state->threads) \
-    if (state->within_panel)
-    for (int32_t i = state->offsets[panel]; i < state->offsets[panel + 1]; ++i) {
-        int32_t f = state->order[i];
-        const int32_t *face = mesh->faces + 3 * f;
-        const double *frame = state->frames + (size_t)f * state->pose_total * 3;
-        double area = state->areas[f];
-        if (area <= 0)
-            continue;
-        area_sum += area;
-        double a = state->grain_local[2 * f] / glen, b = state->grain_local[2 * f + 1] / glen;
-        double projected = sqrt(a * a + b * b);
-        if (projected < 1e-9)
-            continue;
-        const double *q0 = uv + 2 * face[0], *q1 = uv + 2 * face[1], *q2 = uv + 2 * face[2];
-        double t = b / frame[2];
-        double s = (a - frame[1] * t) / frame[0];
-        double dx = (q1[0] - q0[0]) * s + (q2[0] - q0[0]) * t, dy = (q1[1] - q0[1]) * s + (q2[1] - q0[1]) * t;
-        double dlen = sqrt(dx * dx + dy * dy);
-        if (!(dlen > 0))
-            continue;
-        sum_u += area * projected * dx / dlen;
-        sum_v += area * projected * dy / dlen;
+    for (int block = 0; block < SUM_BLOCKS; ++block) {
+        sum_u += block_sums[block][0];
+        sum_v += block_sums[block][1];
+        area_sum += block_sums[block][2];
     }
     *norm = sqrt(sum_u * sum_u + sum_v * sum_v);
     if (!(*norm > 1e-3 * area_sum)) {
@@ -1159,11 +1192,20 @@ static void rotate_panel(const textile_state *state, int32_t panel, double angle
     int32_t n = system->vertex_count;
     if (angle == 0 || n == 0)
         return;
-    double cu = 0, cv = 0;
-#pragma omp parallel for schedule(static) reduction(+ : cu, cv) num_threads(state->threads) if (state->within_panel)
-    for (int32_t l = 0; l < n; ++l) {
-        cu += uv[2 * system->vertices[l]];
-        cv += uv[2 * system->vertices[l] + 1];
+    double block_sums[SUM_BLOCKS][2], cu = 0, cv = 0;
+#pragma omp parallel for schedule(static) num_threads(state->threads) if (state->within_panel)
+    for (int block = 0; block < SUM_BLOCKS; ++block) {
+        double sum_u = 0, sum_v = 0;
+        for (int32_t l = block_start(0, n, block); l < block_start(0, n, block + 1); ++l) {
+            sum_u += uv[2 * system->vertices[l]];
+            sum_v += uv[2 * system->vertices[l] + 1];
+        }
+        block_sums[block][0] = sum_u;
+        block_sums[block][1] = sum_v;
+    }
+    for (int block = 0; block < SUM_BLOCKS; ++block) {
+        cu += block_sums[block][0];
+        cv += block_sums[block][1];
     }
     cu /= n;
     cv /= n;
@@ -1568,18 +1610,25 @@ static void panel_figures(const textile_state *state, const double *uv, double *
     const pz_pattern *pattern = state->pattern;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
     for (int32_t p = 0; p < pattern->panel_count; ++p) {
-        double sum = state->panel_pull[p];
+        int32_t first = state->offsets[p], faces = state->offsets[p + 1] - first;
+        double block_energy[SUM_BLOCKS], sum = state->panel_pull[p];
         int32_t count = 0;
-#pragma omp parallel for schedule(static) reduction(+ : sum, count) num_threads(state->threads) if (state->within_panel)
-        for (int32_t i = state->offsets[p]; i < state->offsets[p + 1]; ++i) {
-            sum += state->face_energy[state->order[i]];
-            count += state->face_flipped[state->order[i]];
+#pragma omp parallel for schedule(static) reduction(+ : count) num_threads(state->threads) if (state->within_panel)
+        for (int block = 0; block < SUM_BLOCKS; ++block) {
+            double block_sum = 0;
+            for (int32_t i = block_start(first, faces, block); i < block_start(first, faces, block + 1); ++i) {
+                block_sum += state->face_energy[state->order[i]];
+                count += state->face_flipped[state->order[i]];
+            }
+            block_energy[block] = block_sum;
         }
+        for (int block = 0; block < SUM_BLOCKS; ++block)
+            sum += block_energy[block];
         energy[p] = sum;
         /* Outline crossings count as defects like flipped faces: the line search never adds one
          * (a dart closing past zero, a boundary folding over itself cannot be cut). */
-        int32_t first = state->outline_offsets[p], edges = state->outline_offsets[p + 1] - first;
-        int32_t crossings = pz_metrics_outline_crossings(state->outline_edges + 2 * (size_t)first, edges, uv);
+        int32_t outline = state->outline_offsets[p], edges = state->outline_offsets[p + 1] - outline;
+        int32_t crossings = pz_metrics_outline_crossings(state->outline_edges + 2 * (size_t)outline, edges, uv);
         flipped[p] = count + (crossings > 0 ? crossings : 0);
     }
 }

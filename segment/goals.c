@@ -41,7 +41,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "segment/segment.h"
+#include "segment/internal.h"
 #include "param/param.h"
 
 #include <math.h>
@@ -66,13 +66,54 @@ typedef struct panel_walk {
     const uint8_t *edge_cut;
     const int32_t *face_ids;
     int32_t count;
-    int32_t *local;        /* face_count: index in face_ids, or -1 */
+    const int32_t *face_panel; /* face_count: the panels' labels when known (face_ids is one of them), or NULL */
+    int32_t *local;        /* face_count: index in face_ids, or -1 (scratch: -1 again when done) */
     int32_t *corner_root;  /* 3 * count: union-find over panel corners (index 3 i + k) */
     uint8_t *on_outline;   /* 3 * count: the half-edge is on the opened panel's outline */
-    int32_t *neighbour;    /* face_count: flood-fill label of faces outside the panel, -1 unset */
+    int32_t *neighbour;    /* face_count: flood-fill label of faces outside the panel, -1 unset (scratch) */
     int32_t *stack;        /* face_count */
+    int32_t *labelled;     /* face_count: the faces given a neighbour label, to unset them when done */
+    int32_t labelled_count;
     int32_t next_label;
 } panel_walk;
+
+/* Face-indexed arrays of panel_walk, all -1 between evaluations (local, neighbour) so that an evaluation
+ * costs O(its panel and neighbours) rather than O(F) to initialize them. One per thread. */
+struct seg_goal_scratch {
+    int32_t face_count;
+    int32_t *local, *neighbour, *stack, *labelled;
+};
+
+seg_goal_scratch *seg_goal_scratch_new(int32_t face_count)
+{
+    seg_goal_scratch *scratch = calloc(1, sizeof *scratch);
+    if (!scratch)
+        return NULL;
+    size_t bytes = ((size_t)face_count + 1) * sizeof(int32_t);
+    scratch->face_count = face_count;
+    scratch->local = malloc(bytes);
+    scratch->neighbour = malloc(bytes);
+    scratch->stack = malloc(bytes);
+    scratch->labelled = malloc(bytes);
+    if (!scratch->local || !scratch->neighbour || !scratch->stack || !scratch->labelled) {
+        seg_goal_scratch_free(scratch);
+        return NULL;
+    }
+    memset(scratch->local, 0xff, bytes);
+    memset(scratch->neighbour, 0xff, bytes);
+    return scratch;
+}
+
+void seg_goal_scratch_free(seg_goal_scratch *scratch)
+{
+    if (!scratch)
+        return;
+    free(scratch->local);
+    free(scratch->neighbour);
+    free(scratch->stack);
+    free(scratch->labelled);
+    free(scratch);
+}
 
 static int32_t find_root(int32_t *root, int32_t c)
 {
@@ -147,11 +188,14 @@ static int32_t neighbour_label(panel_walk *w, int32_t h)
     int32_t face = pz_he_face(twin);
     if (w->local[face] >= 0)
         return NEIGHBOUR_SELF;
+    if (w->face_panel) /* the panel is a whole one of these: the others are its neighbours' components */
+        return w->face_panel[face];
     if (w->neighbour[face] >= 0)
         return w->neighbour[face];
     /* Flood fill the neighbouring panel across uncut edges. */
     int32_t label = w->next_label++, top = 0;
     w->neighbour[face] = label;
+    w->labelled[w->labelled_count++] = face;
     w->stack[top++] = face;
     while (top > 0) {
         int32_t f = w->stack[--top];
@@ -163,6 +207,7 @@ static int32_t neighbour_label(panel_walk *w, int32_t h)
             if (w->neighbour[across] >= 0 || w->local[across] >= 0)
                 continue;
             w->neighbour[across] = label;
+            w->labelled[w->labelled_count++] = across;
             w->stack[top++] = across;
         }
     }
@@ -539,65 +584,82 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
     return status;
 }
 
+/* Frees the walk's own arrays and leaves the scratch as it found it (local and neighbour all -1). */
 static void walk_free(panel_walk *w)
 {
-    free(w->local);
+    for (int32_t i = 0; w->local && i < w->count; ++i)
+        w->local[w->face_ids[i]] = -1;
+    for (int32_t i = 0; i < w->labelled_count; ++i)
+        w->neighbour[w->labelled[i]] = -1;
     free(w->corner_root);
     free(w->on_outline);
-    free(w->neighbour);
-    free(w->stack);
 }
 
-pz_status pz_segment_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
-                           const int32_t *face_ids, int32_t count, const pz_goal_options *options,
-                           pz_goal_result *out, pz_ctx *ctx)
+/* Steps 1-3, then 4 when the panel is a disk within the corner bound. */
+static pz_status evaluate_walk(panel_walk *w, const pz_goal_options *options, pz_goal_result *out, pz_ctx *ctx)
 {
-    if (!mesh || !topology || !edge_cut || !face_ids || !options || !out || count <= 0)
-        return pz_error(ctx, PZ_ERR_USAGE, "segment goals: no panel or no options");
+    for (int32_t c = 0; c < 3 * w->count; ++c)
+        w->on_outline[c] = inner_twin(w, 3 * w->face_ids[c / 3] + c % 3, 1) < 0;
+    join_corners(w, 1);
+    int32_t components = opened_components(w);
+    int32_t euler = opened_euler(w);
+    if (!walk_outline(w, TURN_WINDOW_EDGES * mean_edge(w), &out->boundary_loops, &out->corners))
+        return pz_error(ctx, PZ_ERR_NOMEM, "segment goals: out of memory");
+    int32_t max_corners = options->max_corners > 0 ? options->max_corners : DEFAULT_MAX_CORNERS;
+    if (components != 1 || out->boundary_loops != 1 || euler != 1)
+        out->failures |= PZ_GOAL_NOT_DISK;
+    if (out->corners > max_corners)
+        out->failures |= PZ_GOAL_CORNERS;
+    /* A panel that fails on topology or corners must be split anyway: flattening it would only cost. */
+    return out->failures ? PZ_OK : flatten_panel(w, options, out, ctx);
+}
+
+pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
+                    const int32_t *face_panel, const int32_t *face_ids, int32_t count, const pz_goal_options *options,
+                    seg_goal_scratch *scratch, pz_goal_result *out, pz_ctx *ctx)
+{
+    if (!mesh || !topology || !edge_cut || !face_ids || !options || !out || !scratch || count <= 0 ||
+        scratch->face_count != topology->face_count)
+        return pz_error(ctx, PZ_ERR_USAGE, "segment goals: no panel, options or scratch");
     if (options->max_strain < 0 || options->max_corners < 0)
         return pz_error(ctx, PZ_ERR_USAGE, "segment goals: negative strain or corner bound");
     memset(out, 0, sizeof *out);
     out->max_abs_strain = -1;
     out->min_dart_opening_deg = -1;
-    panel_walk w = {mesh, topology, edge_cut, face_ids, count, NULL, NULL, NULL, NULL, NULL, 0};
-    size_t faces = (size_t)topology->face_count;
-    w.local = malloc(faces * sizeof(int32_t) + 1);
-    w.neighbour = malloc(faces * sizeof(int32_t) + 1);
-    w.stack = malloc(faces * sizeof(int32_t) + 1);
+    panel_walk w;
+    memset(&w, 0, sizeof w);
+    w.mesh = mesh, w.topology = topology, w.edge_cut = edge_cut, w.face_ids = face_ids, w.face_panel = face_panel;
+    w.neighbour = scratch->neighbour, w.stack = scratch->stack, w.labelled = scratch->labelled;
     w.corner_root = malloc((size_t)3 * count * sizeof(int32_t));
     w.on_outline = malloc((size_t)3 * count);
-    if (!w.local || !w.neighbour || !w.stack || !w.corner_root || !w.on_outline) {
+    if (!w.corner_root || !w.on_outline) {
         walk_free(&w);
         return pz_error(ctx, PZ_ERR_NOMEM, "segment goals: out of memory");
     }
-    memset(w.local, 0xff, faces * sizeof(int32_t));
-    memset(w.neighbour, 0xff, faces * sizeof(int32_t));
-    for (int32_t i = 0; i < count; ++i) {
+    w.local = scratch->local;
+    for (int32_t i = 0; i < count; ++i, ++w.count) {
         if (face_ids[i] < 0 || face_ids[i] >= topology->face_count || w.local[face_ids[i]] >= 0) {
             walk_free(&w);
             return pz_error(ctx, PZ_ERR_USAGE, "segment goals: face %d out of range or repeated", (int)face_ids[i]);
         }
         w.local[face_ids[i]] = i;
     }
-    for (int32_t c = 0; c < 3 * count; ++c)
-        w.on_outline[c] = inner_twin(&w, 3 * face_ids[c / 3] + c % 3, 1) < 0;
-    join_corners(&w, 1);
-    int32_t components = opened_components(&w);
-    int32_t euler = opened_euler(&w);
-    pz_status status = PZ_OK;
-    if (!walk_outline(&w, TURN_WINDOW_EDGES * mean_edge(&w), &out->boundary_loops, &out->corners))
-        status = pz_error(ctx, PZ_ERR_NOMEM, "segment goals: out of memory");
-    int32_t max_corners = options->max_corners > 0 ? options->max_corners : DEFAULT_MAX_CORNERS;
-    if (!status) {
-        if (components != 1 || out->boundary_loops != 1 || euler != 1)
-            out->failures |= PZ_GOAL_NOT_DISK;
-        if (out->corners > max_corners)
-            out->failures |= PZ_GOAL_CORNERS;
-        /* A panel that fails on topology or corners must be split anyway: flattening it would only cost. */
-        if (!out->failures)
-            status = flatten_panel(&w, options, out, ctx);
-    }
+    pz_status status = evaluate_walk(&w, options, out, ctx);
     walk_free(&w);
+    return status;
+}
+
+pz_status pz_segment_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
+                           const int32_t *face_ids, int32_t count, const pz_goal_options *options,
+                           pz_goal_result *out, pz_ctx *ctx)
+{
+    if (!topology)
+        return pz_error(ctx, PZ_ERR_USAGE, "segment goals: no panel or no options");
+    seg_goal_scratch *scratch = seg_goal_scratch_new(topology->face_count);
+    if (!scratch)
+        return pz_error(ctx, PZ_ERR_NOMEM, "segment goals: out of memory");
+    pz_status status = seg_goals(mesh, topology, edge_cut, NULL, face_ids, count, options, scratch, out, ctx);
+    seg_goal_scratch_free(scratch);
     return status;
 }
 

@@ -61,8 +61,11 @@ typedef struct seg_layout {
     int32_t *edge_owner;   /* edge_count: the inserted path that first cut it, -1 */
     seg_path *paths;
     int32_t path_count, path_capacity;
-    /* Panels of the current cut flags (labels_valid = 0 once a flag changes: seg_label_panels relabels). */
-    int labels_valid;
+    /* Panels of the current cut flags (labels_valid = 0 once a flag changes: seg_label_panels relabels,
+     * only around the edges whose flag differs from labelled_cut once `labelled`). */
+    int labels_valid, labelled;
+    uint8_t *labelled_cut;   /* edge_count: edge_cut as of the last labelling */
+    int32_t *label_stack, *label_region, *label_spare; /* relabelling scratch (face_count; stack max(F, E)) */
     int32_t *face_panel;
     int32_t panel_count;
     int32_t *panel_offsets;  /* panel_count + 1 */
@@ -71,6 +74,7 @@ typedef struct seg_layout {
     uint8_t *panel_evaluated;
     pz_segment_cache *cache;     /* options->cache, or own_cache */
     pz_segment_cache own_cache;
+    struct seg_goal_scratch **goal_scratch; /* threads: evaluation scratch, created when first needed */
     int32_t evaluation_count;
     int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
     double mean_edge;
@@ -92,6 +96,16 @@ uint8_t seg_closest_arm(const pz_trace_graph *graph, int32_t v, const double d[3
 pz_status seg_insert_with_mirror(seg_layout *layout, const pz_trace_path *path, pz_ctx *ctx);
 /* 1 when panel p lies on the mirrored (positive) side of the plane: its mirror panel gets the cuts. */
 int seg_panel_mirrored_side(const seg_layout *layout, int32_t p);
+
+/* goals.c: pz_segment_goals with reusable scratch (seg_goal_scratch_new(face_count); one per thread) and,
+ * when face_panel is given (the layout's labels; face_ids must be one whole panel of them), the
+ * neighbours' labels read from it rather than flood-filled. The same results, at O(panel) cost. */
+typedef struct seg_goal_scratch seg_goal_scratch;
+seg_goal_scratch *seg_goal_scratch_new(int32_t face_count);
+void seg_goal_scratch_free(seg_goal_scratch *scratch);
+pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
+                    const int32_t *face_panel, const int32_t *face_ids, int32_t count, const pz_goal_options *options,
+                    seg_goal_scratch *scratch, pz_goal_result *out, pz_ctx *ctx);
 
 /* fallback.c */
 #define SEG_FALLBACK_ROUNDS 16

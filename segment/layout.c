@@ -6,8 +6,9 @@
  *
  * The layout is a set of cut-edge flags; panels are the face components
  * across uncut edges, numbered in order of their first face. Every step
- * changes a few flags, relabels the panels (O(F)) and evaluates the panels
- * whose goals are not known yet: an evaluation (pz_segment_goals) is cached
+ * changes a few flags, relabels the panels (flooding only the panels next to
+ * the changed edges, then renumbering: seg_label_panels) and evaluates the
+ * panels whose goals are not known yet: an evaluation (pz_segment_goals) is cached
  * under a 64-bit hash of the panel's faces and of the neighbour seen across
  * each of its outline edges (the corners depend on it), so a panel that a
  * step did not touch is never flattened again. The panels to evaluate are
@@ -127,62 +128,77 @@ static pz_status build_vertex_edges(seg_layout *layout, pz_ctx *ctx)
 
 /* ---------------------------------------------------------------- panels */
 
-pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx)
+/*
+ * Panels are the face components across uncut edges, numbered in order of
+ * their first (smallest) face, each panel's faces increasing. The first
+ * labelling floods the whole mesh. Later ones are local: only the panels next
+ * to an edge whose flag changed since the last labelling (labelled_cut keeps
+ * the flags it saw) are flooded again; every other panel keeps its faces,
+ * since an unchanged uncut edge joins two faces of one panel. Then all panels
+ * are renumbered by first face, which moves the face lists and rewrites
+ * face_panel of the panels whose number changed: sequential passes, where a
+ * flood of the whole mesh cost 0.5 ms per step on the wetsuit (20K faces,
+ * ~5,000 relabellings). The result is the full flood's, label for label.
+ */
+static void flood_panel(const seg_layout *layout, int32_t seed, int32_t label, int32_t unlabelled, int32_t *stack)
 {
-    if (layout->labels_valid)
-        return PZ_OK; /* no cut changed since: labels and evaluations stand */
     const pz_topology *t = layout->topology;
-    int32_t faces = t->face_count;
-    int32_t *stack = malloc((size_t)faces * sizeof(int32_t) + 1);
-    if (!stack)
-        return nomem(ctx);
-    memset(layout->face_panel, 0xff, (size_t)faces * sizeof(int32_t));
-    int32_t panels = 0;
-    for (int32_t seed = 0; seed < faces; ++seed) {
-        if (layout->face_panel[seed] >= 0)
-            continue;
-        int32_t top = 0;
-        layout->face_panel[seed] = panels;
-        stack[top++] = seed;
-        while (top > 0) {
-            int32_t f = stack[--top];
-            for (int k = 0; k < 3; ++k) {
-                int32_t g = t->twin[3 * f + k];
-                if (g < 0 || layout->edge_cut[t->halfedge_edge[3 * f + k]] || layout->face_panel[pz_he_face(g)] >= 0)
-                    continue;
-                layout->face_panel[pz_he_face(g)] = panels;
-                stack[top++] = pz_he_face(g);
-            }
+    int32_t top = 0;
+    layout->face_panel[seed] = label;
+    stack[top++] = seed;
+    while (top > 0) {
+        int32_t f = stack[--top];
+        for (int k = 0; k < 3; ++k) {
+            int32_t g = t->twin[3 * f + k];
+            if (g < 0 || layout->edge_cut[t->halfedge_edge[3 * f + k]] ||
+                layout->face_panel[pz_he_face(g)] != unlabelled)
+                continue;
+            layout->face_panel[pz_he_face(g)] = label;
+            stack[top++] = pz_he_face(g);
         }
-        ++panels;
     }
-    free(stack);
+}
+
+/* Resizes the per-panel arrays to `panels` and marks every panel unevaluated. */
+static pz_status panel_arrays_resize(seg_layout *layout, int32_t panels, pz_ctx *ctx)
+{
     int32_t *offsets = realloc(layout->panel_offsets, ((size_t)panels + 1) * sizeof(int32_t));
-    pz_goal_result *goals = realloc(layout->panel_goals, ((size_t)panels + 1) * sizeof(pz_goal_result));
-    uint8_t *evaluated = realloc(layout->panel_evaluated, (size_t)panels + 1);
     if (offsets)
         layout->panel_offsets = offsets;
+    pz_goal_result *goals = realloc(layout->panel_goals, ((size_t)panels + 1) * sizeof(pz_goal_result));
     if (goals)
         layout->panel_goals = goals;
+    uint8_t *evaluated = realloc(layout->panel_evaluated, (size_t)panels + 1);
     if (evaluated)
         layout->panel_evaluated = evaluated;
     if (!offsets || !goals || !evaluated)
         return nomem(ctx);
-    memset(offsets, 0, ((size_t)panels + 1) * sizeof(int32_t));
     memset(evaluated, 0, (size_t)panels + 1);
+    layout->panel_count = panels;
+    return PZ_OK;
+}
+
+/* The first labelling: a flood from every face not reached yet, in face order. */
+static pz_status label_all(seg_layout *layout, pz_ctx *ctx)
+{
+    int32_t faces = layout->topology->face_count, panels = 0;
+    memset(layout->face_panel, 0xff, (size_t)faces * sizeof(int32_t));
+    for (int32_t seed = 0; seed < faces; ++seed)
+        if (layout->face_panel[seed] < 0)
+            flood_panel(layout, seed, panels++, -1, layout->label_stack);
+    pz_status status = panel_arrays_resize(layout, panels, ctx);
+    if (status)
+        return status;
+    int32_t *offsets = layout->panel_offsets;
+    memset(offsets, 0, ((size_t)panels + 1) * sizeof(int32_t));
     for (int32_t f = 0; f < faces; ++f)
         ++offsets[layout->face_panel[f] + 1];
     for (int32_t p = 0; p < panels; ++p)
         offsets[p + 1] += offsets[p];
-    int32_t *cursor = malloc(((size_t)panels + 1) * sizeof(int32_t));
-    if (!cursor)
-        return nomem(ctx);
+    int32_t *cursor = layout->label_stack; /* the flood is over: its stack is free */
     memcpy(cursor, offsets, (size_t)panels * sizeof(int32_t));
     for (int32_t f = 0; f < faces; ++f)
         layout->panel_faces[cursor[layout->face_panel[f]]++] = f;
-    free(cursor);
-    layout->panel_count = panels;
-    layout->labels_valid = 1;
     return PZ_OK;
 }
 
@@ -216,6 +232,213 @@ static int panel_vetoed(const seg_layout *layout, int32_t p)
         if (layout->options->vetoed[i] == key)
             return 1;
     return 0;
+}
+
+/* Merges the increasing lists a[0..na-1] and b[0..nb-1] into out. */
+static void merge_faces(const int32_t *a, int32_t na, const int32_t *b, int32_t nb, int32_t *out)
+{
+    int32_t i = 0, j = 0, k = 0;
+    while (i < na && j < nb)
+        out[k++] = a[i] < b[j] ? a[i++] : b[j++];
+    while (i < na)
+        out[k++] = a[i++];
+    while (j < nb)
+        out[k++] = b[j++];
+}
+
+/* The edges whose flag changed since the last labelling, into out (their count); labelled_cut catches up.
+ * Eight flags are compared at a time: a step changes a few of ~30K. */
+static int32_t changed_edges(seg_layout *layout, int32_t *out)
+{
+    int32_t edges = layout->topology->edge_count, count = 0;
+    for (int32_t base = 0; base < edges; base += 8) {
+        if (base + 8 <= edges) {
+            uint64_t now, then;
+            memcpy(&now, layout->edge_cut + base, 8);
+            memcpy(&then, layout->labelled_cut + base, 8);
+            if (now == then)
+                continue;
+        }
+        for (int32_t e = base; e < base + 8 && e < edges; ++e)
+            if (layout->edge_cut[e] != layout->labelled_cut[e]) {
+                layout->labelled_cut[e] = layout->edge_cut[e];
+                out[count++] = e;
+            }
+    }
+    return count;
+}
+
+/*
+ * Sorts label_region[0..count-1], made of `runs` increasing runs starting at
+ * run_start[0..runs-1] (run_start[runs] = count), by merging neighbouring
+ * runs pass after pass: O(count log runs). label_spare is scratch.
+ */
+static void merge_runs(seg_layout *layout, int32_t *run_start, int32_t runs, int32_t count)
+{
+    run_start[runs] = count;
+    while (runs > 1) {
+        int32_t merged = 0;
+        for (int32_t r = 0; r < runs; r += 2, ++merged) {
+            int32_t a = run_start[r], b = run_start[r + 1], end = r + 1 < runs ? run_start[r + 2] : b;
+            merge_faces(layout->label_region + a, b - a, layout->label_region + b, end - b, layout->label_spare + a);
+            run_start[merged] = a;
+        }
+        run_start[merged] = count;
+        runs = merged;
+        int32_t *sorted = layout->label_spare;
+        layout->label_spare = layout->label_region;
+        layout->label_region = sorted;
+    }
+}
+
+/*
+ * The faces of the panels next to the changed edges, increasing, into
+ * layout->label_region (returns their count); `touched` (old panel_count)
+ * gets 1 for those panels. Each panel's list is increasing already.
+ */
+static int32_t touched_region(seg_layout *layout, const int32_t *changed, int32_t changed_count, uint8_t *touched,
+                              int32_t *run_start)
+{
+    const pz_topology *t = layout->topology;
+    int32_t count = 0, runs = 0;
+    for (int32_t i = 0; i < changed_count; ++i)
+        for (int side = 0; side < 2; ++side) {
+            int32_t h = t->edge_halfedge[2 * changed[i] + side];
+            int32_t p = h < 0 ? -1 : layout->face_panel[pz_he_face(h)];
+            if (p < 0 || touched[p])
+                continue;
+            touched[p] = 1;
+            int32_t first = layout->panel_offsets[p], n = layout->panel_offsets[p + 1] - first;
+            memcpy(layout->label_region + count, layout->panel_faces + first, (size_t)n * sizeof(int32_t));
+            run_start[runs++] = count;
+            count += n;
+        }
+    merge_runs(layout, run_start, runs, count);
+    return count;
+}
+
+/* One panel of the new labelling: an old panel kept whole, or a component of the flooded region. */
+typedef struct label_piece {
+    int32_t first_face;
+    int32_t old_panel;   /* -1 for a component */
+    int32_t size;
+} label_piece;
+
+/*
+ * Renumbers: kept panels and components merged by first face (both lists
+ * are in that order already), then the face lists and face_panel rewritten.
+ * Component c's faces carry the label -2 - c in face_panel on entry.
+ */
+static pz_status renumber(seg_layout *layout, const uint8_t *touched, const label_piece *components,
+                          int32_t component_count, int32_t region_count, pz_ctx *ctx)
+{
+    int32_t old_count = layout->panel_count, kept = 0;
+    for (int32_t p = 0; p < old_count; ++p)
+        kept += !touched[p];
+    int32_t panels = kept + component_count;
+    label_piece *order = malloc(((size_t)panels + 1) * sizeof *order);
+    int32_t *old_offsets = malloc(((size_t)old_count + 1) * sizeof(int32_t));
+    int32_t *component_label = malloc(((size_t)component_count + 1) * sizeof(int32_t));
+    int32_t *cursor = malloc(((size_t)component_count + 1) * sizeof(int32_t)); /* component -> next slot */
+    if (!order || !old_offsets || !component_label || !cursor) {
+        free(order), free(old_offsets), free(component_label), free(cursor);
+        return nomem(ctx);
+    }
+    memcpy(old_offsets, layout->panel_offsets, ((size_t)old_count + 1) * sizeof(int32_t));
+    int32_t n = 0, c = 0;
+    for (int32_t p = 0; p <= old_count; ++p) {
+        int32_t first = p < old_count ? layout->panel_faces[old_offsets[p]] : INT32_MAX;
+        if (p < old_count && touched[p])
+            continue;
+        for (; c < component_count && components[c].first_face < first; ++c)
+            order[n++] = components[c];
+        if (p < old_count)
+            order[n++] = (label_piece){first, p, old_offsets[p + 1] - old_offsets[p]};
+    }
+    pz_status status = panel_arrays_resize(layout, panels, ctx);
+    int32_t *faces_out = layout->label_spare, *offsets = layout->panel_offsets;
+    for (int32_t q = 0; !status && q < panels; ++q) {
+        offsets[q + 1] = (q ? offsets[q] : 0) + order[q].size;
+        int32_t old = order[q].old_panel;
+        if (old < 0) {
+            component_label[-2 - layout->face_panel[order[q].first_face]] = q;
+            continue;
+        }
+        memcpy(faces_out + offsets[q], layout->panel_faces + old_offsets[old], (size_t)order[q].size * sizeof(int32_t));
+        if (old != q)
+            for (int32_t i = offsets[q]; i < offsets[q + 1]; ++i)
+                layout->face_panel[faces_out[i]] = q;
+    }
+    if (!status) {
+        offsets[0] = 0;
+        /* Components: the region is increasing, so is each component's list. */
+        for (int32_t k = 0; k < component_count; ++k)
+            cursor[k] = offsets[component_label[k]];
+        for (int32_t i = 0; i < region_count; ++i) {
+            int32_t f = layout->label_region[i], k = -2 - layout->face_panel[f];
+            faces_out[cursor[k]++] = f;
+            layout->face_panel[f] = component_label[k];
+        }
+        layout->label_spare = layout->panel_faces;
+        layout->panel_faces = faces_out;
+    }
+    free(order), free(old_offsets), free(component_label), free(cursor);
+    return status;
+}
+
+/* A later labelling: floods only the panels next to the edges whose flag changed. */
+static pz_status label_changed(seg_layout *layout, pz_ctx *ctx)
+{
+    int32_t changed_count = changed_edges(layout, layout->label_stack);
+    if (changed_count == 0) {
+        memset(layout->panel_evaluated, 0, (size_t)layout->panel_count + 1);
+        return PZ_OK;
+    }
+    uint8_t *touched = calloc((size_t)layout->panel_count + 1, 1);
+    int32_t *run_start = malloc(((size_t)layout->panel_count + 2) * sizeof(int32_t));
+    if (!touched || !run_start) {
+        free(touched), free(run_start);
+        return nomem(ctx);
+    }
+    /* The changed edges are read before the first flood reuses the stack. */
+    int32_t region_count = touched_region(layout, layout->label_stack, changed_count, touched, run_start);
+    free(run_start);
+    for (int32_t i = 0; i < region_count; ++i)
+        layout->face_panel[layout->label_region[i]] = -1;
+    /* At most one component per region face. */
+    label_piece *components = malloc(((size_t)region_count + 1) * sizeof *components);
+    int32_t component_count = 0;
+    for (int32_t i = 0; components && i < region_count; ++i) {
+        int32_t seed = layout->label_region[i];
+        if (layout->face_panel[seed] != -1)
+            continue;
+        flood_panel(layout, seed, -2 - component_count, -1, layout->label_stack);
+        components[component_count++] = (label_piece){seed, -1, 0};
+    }
+    for (int32_t i = 0; components && i < region_count; ++i)
+        ++components[-2 - layout->face_panel[layout->label_region[i]]].size;
+    pz_status status = components ? renumber(layout, touched, components, component_count, region_count, ctx)
+                                  : nomem(ctx);
+    free(components);
+    free(touched);
+    return status;
+}
+
+pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx)
+{
+    if (layout->labels_valid)
+        return PZ_OK; /* no cut changed since: labels and evaluations stand */
+    pz_status status;
+    if (layout->labelled) {
+        status = label_changed(layout, ctx);
+    } else {
+        memcpy(layout->labelled_cut, layout->edge_cut, (size_t)layout->topology->edge_count);
+        status = label_all(layout, ctx);
+    }
+    /* After a failure the labels are unknown: the next call floods everything. */
+    layout->labelled = status == PZ_OK;
+    layout->labels_valid = status == PZ_OK;
+    return status;
 }
 
 /* Cache key of panel p: its faces and, for every outline edge, the first face of the panel across. */
@@ -287,15 +510,15 @@ void pz_segment_cache_free(pz_segment_cache **cache)
 }
 
 /* One evaluation; a failed flattening (not out of memory) counts as a panel that is not injective. */
-static pz_status evaluate_one(const seg_layout *layout, int32_t p, pz_goal_result *out)
+static pz_status evaluate_one(const seg_layout *layout, int32_t p, seg_goal_scratch *scratch, pz_goal_result *out)
 {
     pz_ctx local;
     pz_ctx_init(&local);
     local.quiet = 1;
     const int32_t *faces = layout->panel_faces + layout->panel_offsets[p];
     int32_t count = layout->panel_offsets[p + 1] - layout->panel_offsets[p];
-    pz_status status = pz_segment_goals(layout->mesh, layout->topology, layout->edge_cut, faces, count,
-                                        &layout->goals, out, &local);
+    pz_status status = seg_goals(layout->mesh, layout->topology, layout->edge_cut, layout->face_panel, faces, count,
+                                 &layout->goals, scratch, out, &local);
     if (status && status != PZ_ERR_NOMEM) {
         memset(out, 0, sizeof *out);
         out->failures = PZ_GOAL_NOT_INJECTIVE;
@@ -338,13 +561,21 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
     for (int32_t i = 0; i < misses; ++i)
         miss_faces += layout->panel_offsets[miss[i] + 1] - layout->panel_offsets[miss[i]];
     int parallel = misses > 1 && miss_faces >= PARALLEL_MIN_FACES && !status;
+    /* One evaluation scratch per thread that may run (kept across calls). */
+    for (int32_t t = 0; t < (parallel ? layout->threads : 1) && !status; ++t)
+        if (!layout->goal_scratch[t] && !(layout->goal_scratch[t] = seg_goal_scratch_new(layout->topology->face_count)))
+            status = nomem(ctx);
+    parallel = parallel && !status;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(layout->threads) if (parallel)
     for (int32_t i = 0; i < misses; ++i) {
+        if (status)
+            continue;
         /* Flattening and metrics open parallel regions of their own; inside an inactive region (one
          * thread or one miss) they would wake every core for each small panel. This sets the
          * thread count of this implicit task only. */
         omp_set_num_threads(1);
-        statuses[i] = evaluate_one(layout, miss[i], layout->panel_goals + miss[i]);
+        statuses[i] = evaluate_one(layout, miss[i], layout->goal_scratch[omp_get_thread_num()],
+                                   layout->panel_goals + miss[i]);
     }
     for (int32_t i = 0; i < misses && !status; ++i) {
         if (statuses[i])
@@ -587,6 +818,8 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
     if (!distance)
         return nomem(ctx);
     pz_status status = PZ_OK;
+    /* The distance covers paths[0 .. measured - 1]; each round adds the paths inserted since (-1: none yet). */
+    int32_t measured = -1;
     for (int round = 0; round < MAX_INSERTIONS_PER_LEVEL && !status; ++round) {
         if ((status = seg_evaluate_panels(layout, NULL, ctx)))
             break;
@@ -600,7 +833,11 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
         }
         for (int32_t i = 0; i < layout->path_count; ++i)
             in_paths[i] = layout->paths[i].path;
-        if ((status = pz_trace_distance(layout->graph, in_paths, layout->path_count, 1, distance, ctx)))
+        status = measured < 0 ? pz_trace_distance(layout->graph, in_paths, layout->path_count, 1, distance, ctx)
+                              : pz_trace_distance_add(layout->graph, in_paths + measured, layout->path_count - measured,
+                                                      distance, ctx);
+        measured = layout->path_count;
+        if (status)
             break;
         int32_t best = -1;
         double best_distance = -1;
@@ -1053,9 +1290,16 @@ static void layout_free(seg_layout *layout)
     free(layout->face_panel);
     free(layout->panel_offsets);
     free(layout->panel_faces);
+    free(layout->labelled_cut);
+    free(layout->label_stack);
+    free(layout->label_region);
+    free(layout->label_spare);
     free(layout->panel_goals);
     free(layout->panel_evaluated);
     free(layout->own_cache.entries);
+    for (int32_t t = 0; layout->goal_scratch && t < layout->threads; ++t)
+        seg_goal_scratch_free(layout->goal_scratch[t]);
+    free(layout->goal_scratch);
 }
 
 static pz_status check_options(const pz_segment_options *options, pz_ctx *ctx)
@@ -1088,6 +1332,9 @@ static pz_status layout_init(seg_layout *layout, const pz_mesh *mesh, const pz_t
     for (int k = 0; k < 3; ++k)
         layout->goals.grain[k] = options->grain[k] / g;
     layout->threads = options->threads > 0 ? options->threads : omp_get_max_threads();
+    layout->goal_scratch = calloc((size_t)layout->threads, sizeof *layout->goal_scratch);
+    if (!layout->goal_scratch)
+        return nomem(ctx);
     layout->max_candidates = options->max_candidates > 0 ? options->max_candidates : DEFAULT_MAX_CANDIDATES;
     layout->max_depth = options->max_depth > 0 ? options->max_depth : DEFAULT_MAX_DEPTH;
     layout->mean_edge = pz_field_mean_edge_length(mesh, topology);
@@ -1096,7 +1343,13 @@ static pz_status layout_init(seg_layout *layout, const pz_mesh *mesh, const pz_t
     layout->edge_owner = malloc((edges + 1) * sizeof(int32_t));
     layout->face_panel = malloc((faces + 1) * sizeof(int32_t));
     layout->panel_faces = malloc((faces + 1) * sizeof(int32_t));
-    if (!layout->edge_cut || !layout->edge_owner || !layout->face_panel || !layout->panel_faces)
+    layout->labelled_cut = malloc(edges + 1);
+    /* The flood's stack, and the changed edges before it: as many as the faces or the edges. */
+    layout->label_stack = malloc(((faces > edges ? faces : edges) + 1) * sizeof(int32_t));
+    layout->label_region = malloc((faces + 1) * sizeof(int32_t));
+    layout->label_spare = malloc((faces + 1) * sizeof(int32_t));
+    if (!layout->edge_cut || !layout->edge_owner || !layout->face_panel || !layout->panel_faces ||
+        !layout->labelled_cut || !layout->label_stack || !layout->label_region || !layout->label_spare)
         return nomem(ctx);
     memset(layout->edge_owner, 0xff, edges * sizeof(int32_t));
     return build_vertex_edges(layout, ctx);

@@ -278,19 +278,21 @@ static int on_plane(const seg_layout *layout, const seg_segment *s)
     return 1;
 }
 
-static const seg_layout *sort_layout;
-static const seg_segments *sort_segments;
+/* A segment's removal key (no global state for qsort's comparator: pz_segment may run in several threads). */
+typedef struct removal_order {
+    int on_plane;
+    int32_t owner, first_edge, segment;
+} removal_order;
 
 /* Removal order: off-plane before on-plane, then latest inserted first, then by first edge. */
 static int compare_removal(const void *l, const void *r)
 {
-    const seg_segment *a = sort_segments->items + *(const int32_t *)l, *b = sort_segments->items + *(const int32_t *)r;
-    int pa = on_plane(sort_layout, a), pb = on_plane(sort_layout, b);
-    if (pa != pb)
-        return pa - pb;
+    const removal_order *a = l, *b = r;
+    if (a->on_plane != b->on_plane)
+        return a->on_plane - b->on_plane;
     if (a->owner != b->owner)
         return a->owner > b->owner ? -1 : 1;
-    return (a->edges[0] > b->edges[0]) - (a->edges[0] < b->edges[0]);
+    return (a->first_edge > b->first_edge) - (a->first_edge < b->first_edge);
 }
 
 static int all_cut(const seg_layout *layout, const seg_segment *s)
@@ -332,19 +334,19 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
         seg_segments segments;
         if ((status = seg_segments_build(layout, &segments, ctx)))
             break;
-        int32_t *order = malloc(((size_t)segments.count + 1) * sizeof(int32_t));
+        removal_order *order = malloc(((size_t)segments.count + 1) * sizeof *order);
         if (!order) {
             seg_segments_clear(&segments);
             return nomem(ctx);
         }
-        for (int32_t i = 0; i < segments.count; ++i)
-            order[i] = i;
-        sort_layout = layout;
-        sort_segments = &segments;
-        qsort(order, (size_t)segments.count, sizeof(int32_t), compare_removal);
+        for (int32_t i = 0; i < segments.count; ++i) {
+            const seg_segment *s = segments.items + i;
+            order[i] = (removal_order){on_plane(layout, s), s->owner, s->edges[0], i};
+        }
+        qsort(order, (size_t)segments.count, sizeof *order, compare_removal);
         int32_t before = *removed;
         for (int32_t i = 0; i < segments.count && !status; ++i) {
-            const seg_segment *s = segments.items + order[i];
+            const seg_segment *s = segments.items + order[i].segment;
             if (s->sketch || !all_cut(layout, s))
                 continue;
             int done = 0;

@@ -598,41 +598,73 @@ pz_status pz_trace_candidates(const pz_trace_graph *graph, const pz_mesh *mesh, 
 
 /* ---------------------------------------------------------------- distance */
 
+/* Sets the axis nodes of the paths to distance 0 and queues them. Returns 0 when out of memory. */
+static int seed_paths(const pz_trace_path *paths, int32_t path_count, double *distance, trace_heap *heap)
+{
+    for (int32_t p = 0; p < path_count; ++p)
+        for (int32_t i = 0; i < paths[p].vertex_count; ++i)
+            for (int side = 0; side < 4; side += 2) { /* the path's arm and the opposite one: its axis */
+                int32_t node = 4 * paths[p].vertices[i] + (paths[p].arms[i] + side) % 4;
+                if (distance[node] > 0.0 && (distance[node] = 0.0, !trace_heap_push(heap, 0.0, node)))
+                    return 0;
+            }
+    return 1;
+}
+
+/* Dijkstra over the 4-sheeted covering from the queued nodes, lowering distance[]. Returns 0 when out of memory. */
+static int spread(const pz_trace_graph *graph, double *distance, trace_heap *heap)
+{
+    double d;
+    int32_t u;
+    while (trace_heap_pop(heap, &d, &u)) {
+        if (d > distance[u])
+            continue;
+        int32_t v = u / 4, arm = u % 4;
+        for (int32_t i = graph->neighbor_offsets[v]; i < graph->neighbor_offsets[v + 1]; ++i) {
+            int32_t t = 4 * graph->neighbor_vertices[i] + (arm + graph->neighbor_shift[i]) % 4;
+            double nd = d + graph->neighbor_lengths[i];
+            if (nd < distance[t] && (distance[t] = nd, !trace_heap_push(heap, nd, t)))
+                return 0;
+        }
+    }
+    return 1;
+}
+
+static pz_status distance_nomem(const pz_trace_graph *graph, pz_ctx *ctx)
+{
+    return pz_error(ctx, PZ_ERR_NOMEM, "trace: out of memory for the distance over %d nodes", (int)graph->node_count);
+}
+
 pz_status pz_trace_distance(const pz_trace_graph *graph, const pz_trace_path *paths, int32_t path_count,
                             int from_boundary, double *distance, pz_ctx *ctx)
 {
     for (int32_t n = 0; n < graph->node_count; ++n)
         distance[n] = INFINITY;
     trace_heap heap = {0};
-    int ok = 1;
-    for (int32_t p = 0; p < path_count && ok; ++p)
-        for (int32_t i = 0; i < paths[p].vertex_count && ok; ++i)
-            for (int side = 0; side < 4 && ok; side += 2) { /* the path's arm and the opposite one: its axis */
-                int32_t node = 4 * paths[p].vertices[i] + (paths[p].arms[i] + side) % 4;
-                if (distance[node] > 0.0)
-                    distance[node] = 0.0, ok = trace_heap_push(&heap, 0.0, node);
-            }
+    int ok = seed_paths(paths, path_count, distance, &heap);
     for (int32_t n = 0; n < graph->node_count && ok && from_boundary; ++n)
         if (graph->node_kind[n] == PZ_TRACE_NODE_ALONG && distance[n] > 0.0)
             distance[n] = 0.0, ok = trace_heap_push(&heap, 0.0, n);
-    double d;
-    int32_t u;
-    while (ok && trace_heap_pop(&heap, &d, &u)) {
-        if (d > distance[u])
-            continue;
-        int32_t v = u / 4, arm = u % 4;
-        for (int32_t i = graph->neighbor_offsets[v]; i < graph->neighbor_offsets[v + 1] && ok; ++i) {
-            int32_t t = 4 * graph->neighbor_vertices[i] + (arm + graph->neighbor_shift[i]) % 4;
-            double nd = d + graph->neighbor_lengths[i];
-            if (nd < distance[t])
-                distance[t] = nd, ok = trace_heap_push(&heap, nd, t);
-        }
-    }
+    ok = ok && spread(graph, distance, &heap);
     trace_heap_free(&heap);
-    if (!ok)
-        return pz_error(ctx, PZ_ERR_NOMEM, "trace: out of memory for the distance over %d nodes",
-                        (int)graph->node_count);
-    return PZ_OK;
+    return ok ? PZ_OK : distance_nomem(graph, ctx);
+}
+
+/*
+ * Only the nodes the new paths bring nearer are visited. The result is the
+ * full computation's, bit for bit: a node's distance is the least, over the
+ * paths to it from any source, of the edge lengths added in order from the
+ * source; rounding is monotone, so Dijkstra finds that least value whatever
+ * the sources queued, and the sources of a call and of the earlier ones
+ * reach a node by different paths, so their minima simply combine.
+ */
+pz_status pz_trace_distance_add(const pz_trace_graph *graph, const pz_trace_path *paths, int32_t path_count,
+                                double *distance, pz_ctx *ctx)
+{
+    trace_heap heap = {0};
+    int ok = seed_paths(paths, path_count, distance, &heap) && spread(graph, distance, &heap);
+    trace_heap_free(&heap);
+    return ok ? PZ_OK : distance_nomem(graph, ctx);
 }
 
 double pz_trace_path_mean_distance(const pz_trace_path *path, const double *distance)

@@ -9,6 +9,7 @@
  *                             (the M4 stratification: a path occupies the
  *                             nodes of its own axis only, so a path crossing
  *                             it orthogonally is far, a parallel one near)
+ *   pz_trace_distance_add     that distance lowered by paths inserted since
  *   pz_trace_paths_tangential two paths meet other than orthogonally?
  *   pz_trace_snap_polyline    a sketched 3D polyline -> a path on mesh edges
  *
@@ -161,6 +162,15 @@ pz_status pz_trace_candidates(const pz_trace_graph *graph, const pz_mesh *mesh, 
  */
 pz_status pz_trace_distance(const pz_trace_graph *graph, const pz_trace_path *paths, int32_t path_count,
                             int from_boundary, double *distance, pz_ctx *ctx);
+
+/**
+ * Lowers a distance from pz_trace_distance by more paths: the result is, bit
+ * for bit, pz_trace_distance over the earlier paths and these together (same
+ * from_boundary), at the cost of the nodes that come nearer. distance:
+ * node_count, updated in place.
+ */
+pz_status pz_trace_distance_add(const pz_trace_graph *graph, const pz_trace_path *paths, int32_t path_count,
+                                double *distance, pz_ctx *ctx);
 
 /** Mean of distance[] over the path's nodes (vertex, arm): the farthest-first key of path insertion. */
 double pz_trace_path_mean_distance(const pz_trace_path *path, const double *distance);

@@ -13,7 +13,8 @@
  *    extent long, open by 2 degrees or more and become pz_darts;
  *  - bodice at S = 0.03 and at C = 6: never fewer panels than at the defaults,
  *    and their panels meet those stricter goals;
- *  - bodice with 1 and 2 threads: identical face_panel and cut flags;
+ *  - bodice with 1, 2 and 4 threads: identical face_panel, cut flags, dart
+ *    slits, and per-panel goal figures to the bit (issue 5);
  *  - a hemisphere at S = 0: returns PZ_OK with goals_met = 0 and a reason;
  *  - two separate open cylinders: no panel spans both, goals met;
  *  - a closed torus: every panel has a boundary (loops were inserted);
@@ -191,6 +192,25 @@ static void check_layout(const garment *g, const pz_segment_result *result, doub
            (int)result->removed_count, (int)result->evaluation_count, result->total_ms);
 }
 
+/* 1 when two layouts of g agree in every panel, cut and goal figure (doubles compared bit for bit). */
+static int same_result(const pz_segment_result *a, const pz_segment_result *b, const garment *g)
+{
+    if (a->panel_count != b->panel_count || a->dart_count != b->dart_count ||
+        a->evaluation_count != b->evaluation_count ||
+        memcmp(a->face_panel, b->face_panel, (size_t)g->mesh->face_count * sizeof(int32_t)) != 0 ||
+        memcmp(a->edge_cut, b->edge_cut, (size_t)g->topology->edge_count) != 0 ||
+        memcmp(a->extra_cuts, b->extra_cuts, (size_t)g->topology->edge_count) != 0)
+        return 0;
+    for (int32_t p = 0; p < a->panel_count; ++p) {
+        const pz_goal_result *x = &a->panels[p].goals, *y = &b->panels[p].goals;
+        if (x->failures != y->failures || x->corners != y->corners || x->flipped_triangles != y->flipped_triangles ||
+            memcmp(&x->max_abs_strain, &y->max_abs_strain, sizeof(double)) != 0 ||
+            memcmp(&x->min_dart_opening_deg, &y->min_dart_opening_deg, sizeof(double)) != 0)
+            return 0;
+    }
+    return 1;
+}
+
 static void test_bodice(void)
 {
     garment g = generated(PZ_SHAPE_BODICE, 3000);
@@ -217,13 +237,14 @@ static void test_bodice(void)
     CHECK(base->symmetry_residual_mm >= 0 && base->symmetry_residual_mm < 2 * mean_edge,
           "bodice layout residual %.2f mm (mean edge %.2f)", base->symmetry_residual_mm, mean_edge);
 
-    /* Same input, another thread count: the same layout. */
-    pz_segment_result *single = segment(&g, 0.05, 8, 1, PZ_SYMMETRY_AUTO);
-    CHECK(single->panel_count == base->panel_count &&
-              memcmp(single->face_panel, base->face_panel, (size_t)g.mesh->face_count * sizeof(int32_t)) == 0 &&
-              memcmp(single->edge_cut, base->edge_cut, (size_t)g.topology->edge_count) == 0,
-          "bodice: 1 and 2 threads differ (%d vs %d panels)", (int)single->panel_count, (int)base->panel_count);
-    pz_segment_result_free(&single);
+    /* Same input, another thread count: the same layout, darts and evaluations, bit for bit. */
+    for (int threads = 1; threads <= 4; threads += 3) {
+        pz_segment_result *other = segment(&g, 0.05, 8, threads, PZ_SYMMETRY_AUTO);
+        CHECK(same_result(other, base, &g), "bodice: %d and 2 threads differ (%d vs %d panels, %d vs %d darts)",
+              threads, (int)other->panel_count, (int)base->panel_count, (int)other->dart_count,
+              (int)base->dart_count);
+        pz_segment_result_free(&other);
+    }
 
     /* Stricter goals never give fewer panels. */
     pz_segment_result *strict = segment(&g, 0.03, 8, 2, PZ_SYMMETRY_AUTO);

@@ -316,6 +316,17 @@ static void test_distance_and_tangency(const fixture *f, const pz_trace_paths *p
     }
     CHECK(along_zero && finite > f->graph->node_count / 4, "from the boundary: ALONG nodes 0 %d, %d finite", along_zero,
           finite);
+    /* Paths added to a distance: the full computation's result, bit for bit. */
+    pz_trace_path three[3] = {*loop, *other, *ruling};
+    double *added = malloc((size_t)f->graph->node_count * sizeof(double));
+    REQUIRE(added, "out of memory");
+    REQUIRE_OK(pz_trace_distance(f->graph, three, 3, 1, dist, &ctx), ctx);
+    REQUIRE_OK(pz_trace_distance(f->graph, three, 1, 1, added, &ctx), ctx);
+    REQUIRE_OK(pz_trace_distance_add(f->graph, three + 1, 1, added, &ctx), ctx);
+    REQUIRE_OK(pz_trace_distance_add(f->graph, three + 2, 1, added, &ctx), ctx);
+    CHECK(memcmp(dist, added, (size_t)f->graph->node_count * sizeof(double)) == 0,
+          "distance with paths added one by one differs from the distance of all three");
+    free(added);
     free(dist);
 
     int32_t n = f->mesh->vertex_count;
