@@ -111,6 +111,7 @@ typedef struct run_state {
     double *original_positions, *original_poses;
     pz_truing_result truing_result;
     int32_t verdict_rounds;          /* segmentations redone because of them */
+    const pz_mesh *garment;          /* the garment choose_panels segmented (for the verdict's goals) */
     pz_segment_cache *segment_cache; /* evaluations shared by the rounds */
     char verdict_reasons[512];       /* the last rejection's panels, for the progress note */
 } run_state;
@@ -312,6 +313,7 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
                                uint8_t **extra_cuts, pz_ctx *ctx)
 {
     run_state *state = user;
+    state->garment = garment;
     pz_status restored = keep_or_restore_original(state, garment, ctx);
     if (restored != PZ_OK)
         return restored;
@@ -400,21 +402,30 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
  * made again, at most MAX_VERDICT_ROUNDS times; then the last pattern stands,
  * marked by judge_goals. Returns 1 to accept the pattern.
  */
+static pz_status judge_goals(run_state *state, const pz_mesh *garment, const pz_pattern *pattern,
+                             const pz_metrics *metrics, pz_segment_panel *panels, pz_ctx *ctx);
+
 static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metrics *metrics)
 {
     run_state *state = user;
-    if (!state->segment || state->verdict_rounds >= MAX_VERDICT_ROUNDS)
+    if (!state->segment || !state->garment || state->verdict_rounds >= MAX_VERDICT_ROUNDS)
         return 1;
     int32_t panels = pattern->panel_count, faces = pattern->mesh->face_count, added = 0;
     state->verdict_reasons[0] = '\0';
     int32_t *offsets = calloc((size_t)panels + 2, sizeof(int32_t));
     int32_t *order = malloc(((size_t)faces + 1) * sizeof(int32_t));
+    pz_segment_panel *goals = calloc((size_t)panels + 1, sizeof *goals);
     uint64_t *grown = realloc(state->vetoed, ((size_t)state->vetoed_count + panels + 1) * sizeof(uint64_t));
     if (grown)
         state->vetoed = grown;
-    if (!offsets || !order || !grown) {
-        free(offsets);
-        free(order);
+    pz_ctx quiet_ctx;
+    pz_ctx_init(&quiet_ctx);
+    quiet_ctx.quiet = 1;
+    /* Every goal, judged as the report will judge it: strain and injectivity on the joint flattening,
+     * disk and corners on the trued outline. */
+    if (!offsets || !order || !goals || !grown ||
+        judge_goals(state, state->garment, pattern, metrics, goals, &quiet_ctx) != PZ_OK) {
+        free(offsets), free(order), free(goals);
         return 1;
     }
     /* Faces bucketed by panel, each bucket increasing (the key's order). */
@@ -424,22 +435,21 @@ static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metric
         offsets[p + 2] += offsets[p + 1];
     for (int32_t f = 0; f < faces; ++f)
         order[offsets[pattern->face_panel[f] + 1]++] = f;
+    pz_goal_options options = {state->max_corners, state->max_strain, {0, 0, 1}, 0};
     for (int32_t p = 0; p < panels; ++p) {
-        const pz_panel_metrics *panel = &metrics->panels[p];
-        double strain = fmax(fabs(panel->strain_warp.max), fabs(panel->strain_weft.max));
-        int fails = strain > state->max_strain || panel->flipped_triangles > 0 || panel->boundary_self_intersections > 0;
-        if (!fails)
+        if (!goals[p].goals.failures)
             continue;
         state->vetoed[state->vetoed_count + added++] = pz_segment_face_set_key(order + offsets[p], offsets[p + 1] - offsets[p]);
         /* Why, for the note choose_panels prints next round. */
+        char text[256];
+        pz_goal_describe(&goals[p].goals, &options, text, sizeof text);
         size_t used = strlen(state->verdict_reasons);
-        snprintf(state->verdict_reasons + used, sizeof state->verdict_reasons - used,
-                 "%spanel %d (%d faces): strain %.4f, %d flipped, %d outline crossings", used ? "; " : "", (int)p,
-                 (int)(offsets[p + 1] - offsets[p]), strain, (int)panel->flipped_triangles,
-                 (int)panel->boundary_self_intersections);
+        snprintf(state->verdict_reasons + used, sizeof state->verdict_reasons - used, "%spanel %d (%d faces): %s",
+                 used ? "; " : "", (int)p, (int)(offsets[p + 1] - offsets[p]), text);
     }
     free(offsets);
     free(order);
+    free(goals);
     if (added == 0)
         return 1;
     state->vetoed_count += added;
