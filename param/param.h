@@ -396,6 +396,9 @@ typedef struct pz_springmass_options {
     int trial_cut;           /* 1: cut each panel along its suggested line, re-flatten, classify dart/gusset */
     int local_release_only;  /* 1: phase two is only the paper's node sweeps; 0 (default): isotropic phase two
                                 starts with a global (local-global, CHOLMOD) release, docs/springmass.md */
+    int independent_panels;  /* 1: every panel flattened alone (the papers); 0 (default): after phase two the
+                                facing segments of every seam and dart get equal lengths, their mean, exactly
+                                (seam matching, docs/springmass.md) */
 } pz_springmass_options;
 
 typedef enum pz_springmass_stop {
@@ -439,13 +442,22 @@ typedef struct pz_springmass_result {
     double phase_one_ms, phase_two_ms;
     long long global_iterations;     /* local-global iterations of phase two's global release (each one
                                         touches every spring and solves once with the factored Laplacian) */
+    int32_t matched_pairs;           /* facing segment pairs of seams and darts given equal lengths */
+    int32_t unmatched_panels;        /* panels whose outline could not be refitted (left as phase two made them) */
+    int32_t retried_panels;          /* panels flattened again because they ended folded or with a crossing
+                                        outline: 8 heap paths, then from LSCM (docs/springmass.md) */
+    double max_seam_mismatch;        /* worst |side a - side b| / 3D length over the seams and darts, at the
+                                        end (also with independent_panels) */
 } pz_springmass_result;
 
 /**
- * Spring-mass flattening of every panel (seams are not coupled): phase one
- * lays triangles one by one from the seed (largest medial distance),
- * releasing energy after each constrained triangle (heap or full), phase two
- * releases the whole system until the stopping rules of wang2002 Sec. 5.
+ * Spring-mass flattening of every panel: phase one lays each panel's
+ * triangles one by one from its seed (largest medial distance), releasing
+ * energy after each constrained triangle (heap or full); phase two releases
+ * the panel until the stopping rules of wang2002 Sec. 5. Then (unless
+ * options->independent_panels) the facing segments of every seam and dart
+ * get their mean length exactly: each outline is refitted in angle space and
+ * the interior released again with it fixed.
  * uv: pattern->mesh->vertex_count x 2, written (mm). result may be NULL;
  * otherwise it is filled and must be released with pz_springmass_result_clear.
  */

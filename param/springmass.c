@@ -32,8 +32,16 @@
  * minimum on large panels), then sweeps over all nodes until E_S (Eq. 4)
  * and E_C (Eq. 6) are both below the accuracy, or the energy (Eq. 3) varies
  * less than energy_variation, or max_iterations sweeps; a diverging sweep
- * is undone (see DIVERGENCE_RISE). Faces still flipped at the end are
- * untangled geometrically (pz_param_untangle, wirewarp.c).
+ * is undone (see DIVERGENCE_RISE). A panel that ends folded or with its
+ * outline crossing itself is flattened again, with 8 heap paths, then from
+ * its LSCM (see RETRY_PATHS).
+ *
+ * Seam matching (not in the papers, see sm_link): the facing segments of
+ * every seam and dart get the mean of their two 2D lengths; each panel's
+ * outline is refitted to those lengths exactly in angle space (wang2008
+ * Eqs. 2-8 for one loop, fit_loop) and its interior released again with the
+ * outline pinned. Faces still flipped at the end are untangled
+ * geometrically (pz_param_untangle, wirewarp.c), a matched outline kept.
  *
  * Node relaxation, isotropic. The force of Eq. 2 (C = 0.5) moves the node as
  * Eqs. 11-13 with the node starting at rest: dq = dt^2 / (2 m_i) f_i. The
@@ -74,7 +82,9 @@
  *
  * Cost: phase one heap O(F log F) plus the paths; full O(F * n * sweeps);
  * phase two one sparse factorization plus O(n) per global iteration (two
- * triangular solves) and per sweep. Memory O(n + F) plus the factor. Failure: PZ_ERR_NOMEM;
+ * triangular solves) and per sweep; seam matching O(outline) per Newton step
+ * and one more release per linked panel. Memory O(n + F) plus the factor,
+ * for all panels at once (matching needs them all). Failure: PZ_ERR_NOMEM;
  * PZ_ERR_DATA when a panel cannot be reached from its seed through edges.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -88,6 +98,8 @@
 
 /* From wirewarp.c: moves vertices of flipped faces into the kernel of their star. */
 int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
+/* From lscm.c: faces grouped by panel. */
+pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
 
 #define SM_PI 3.14159265358979323846
 #define SM_SPRING_C 0.5          /* wang2002 Sec. 5: C = 0.5 */
@@ -197,6 +209,7 @@ typedef struct sm_settings {
     int max_iterations, phase_one_iterations;
     double accuracy, energy_variation;
     int local_only;         /* phase two without the global release */
+    int independent;        /* no seam matching */
 } sm_settings;
 
 /* Over-relaxation of the isotropic move in the whole-system sweeps of phase
@@ -224,6 +237,9 @@ typedef struct sm_panel {
     double *energy;            /* nv: node energy (relaxation key) */
     double *delta;             /* nv: orthotropic trial step */
     double mean_edge;
+    uint8_t *pinned;           /* nv or NULL: vertices the releases keep in place (a matched outline) */
+    int32_t *loop, loop_count; /* the boundary loop (seam matching), local vertices in order */
+    int32_t *loop_position;    /* nv: index in loop, -1 inside */
     sm_heap node_heap;         /* heap release only */
     double omega;              /* isotropic move scale: 1, or PHASE_TWO_OMEGA in phase two */
     long long relaxations, evaluations;
@@ -243,6 +259,9 @@ static double dist3d(const double *a, const double *b)
 
 static void panel_free(sm_panel *p)
 {
+    free(p->pinned);
+    free(p->loop);
+    free(p->loop_position);
     pz_topology_free(&p->topology);
     free(p->edge_vertices);
     free(p->rest);
@@ -581,7 +600,8 @@ static void refresh_around(sm_panel *p, int32_t v)
 static void sweep(sm_panel *p)
 {
     for (int32_t i = 0; i < p->placed_count; ++i)
-        relax_node(p, p->placed_order[i]);
+        if (!p->pinned || !p->pinned[p->placed_order[i]])
+            relax_node(p, p->placed_order[i]);
 }
 
 /* A whole-system sweep that raises the energy by more than this fraction
@@ -597,6 +617,7 @@ static void sweep(sm_panel *p)
  * returns the stop reason. backup: nv x 2 scratch or NULL. */
 static int energy_release(sm_panel *p, int max_sweeps, double *backup, int *sweeps_run)
 {
+    const double target = p->pinned ? 0 : p->settings->accuracy; /* a matched outline: release it fully */
     double previous = total_energy(p);
     size_t bytes = (size_t)p->nv * 2 * sizeof(double);
     int stop = PZ_SPRINGMASS_STOP_ITERATIONS, run = 0;
@@ -604,7 +625,7 @@ static int energy_release(sm_panel *p, int max_sweeps, double *backup, int *swee
         if (backup) {
             double e_area, e_shape;
             accuracy(p, &e_area, &e_shape);
-            if (e_area <= p->settings->accuracy && e_shape <= p->settings->accuracy) {
+            if (e_area <= target && e_shape <= target) {
                 stop = PZ_SPRINGMASS_STOP_ACCURACY;
                 break;
             }
@@ -656,6 +677,12 @@ static int energy_release(sm_panel *p, int max_sweeps, double *backup, int *swee
 #define GLOBAL_PROXIMAL 1e-8
 #define GLOBAL_STOP 1e-5 /* relative energy decrease per iteration that ends the release */
 #define GLOBAL_HALVINGS 4 /* a step that flips faces is shortened up to 4 times before the release ends */
+#define GLOBAL_PIN 1e8    /* the proximal weight of a pinned vertex (the steps then keep it exactly) */
+
+static double proximal_weight(const sm_panel *p, int32_t v)
+{
+    return p->pinned && p->pinned[v] ? GLOBAL_PIN : GLOBAL_PROXIMAL;
+}
 
 static int32_t flipped_faces(const sm_panel *p)
 {
@@ -668,7 +695,7 @@ static int32_t flipped_faces(const sm_panel *p)
     return count;
 }
 
-/* The spring Laplacian C L + GLOBAL_PROXIMAL I, lower triangle. */
+/* The spring Laplacian C L + the proximal weights (proximal_weight), lower triangle. */
 static cholmod_sparse *spring_laplacian(const sm_panel *p, cholmod_common *cc)
 {
     size_t n = (size_t)p->nv;
@@ -679,7 +706,7 @@ static cholmod_sparse *spring_laplacian(const sm_panel *p, cholmod_common *cc)
     double *tx = t->x;
     for (int32_t v = 0; v < p->nv; ++v) {
         ti[v] = tj[v] = v;
-        tx[v] = GLOBAL_PROXIMAL;
+        tx[v] = proximal_weight(p, v);
     }
     size_t at = n;
     for (int32_t e = 0; e < p->ne; ++e) {
@@ -696,13 +723,13 @@ static cholmod_sparse *spring_laplacian(const sm_panel *p, cholmod_common *cc)
     return matrix;
 }
 
-/* Right-hand side of the global step: sum_e C d_e r_e (local step) plus the proximal pull. */
+/* Right-hand side of the global step: sum_e C d_e r_e (local step) plus the proximal pull (pins too). */
 static void global_rhs(const sm_panel *p, double *b)
 {
     int32_t n = p->nv;
     for (int32_t v = 0; v < n; ++v) {
-        b[v] = GLOBAL_PROXIMAL * p->uv[2 * v];
-        b[n + v] = GLOBAL_PROXIMAL * p->uv[2 * v + 1];
+        b[v] = proximal_weight(p, v) * p->uv[2 * v];
+        b[n + v] = proximal_weight(p, v) * p->uv[2 * v + 1];
     }
     for (int32_t e = 0; e < p->ne; ++e) {
         int32_t a = p->edge_vertices[2 * e], c = p->edge_vertices[2 * e + 1];
@@ -748,7 +775,7 @@ static int global_release(sm_panel *p, pz_ctx *ctx, pz_status *status)
         goto done; /* not definite (cannot happen for a connected panel): the node sweeps alone */
     double energy = total_energy(p);
     int32_t flipped = flipped_faces(p);
-    while (kept < GLOBAL_MAX_ITERATIONS && energy > 0 && !accurate(p)) {
+    while (kept < GLOBAL_MAX_ITERATIONS && energy > 0 && (p->pinned || !accurate(p))) {
         memcpy(previous_uv, p->uv, (size_t)n * 2 * sizeof(double));
         global_rhs(p, rhs->x);
         cholmod_dense *x = cholmod_solve(CHOLMOD_A, factor, rhs, &cc);
@@ -760,6 +787,8 @@ static int global_release(sm_panel *p, pz_ctx *ctx, pz_status *status)
         int accepted = 0;
         for (int halving = 0; halving <= GLOBAL_HALVINGS && !accepted; ++halving, t /= 2) {
             for (int32_t v = 0; v < n; ++v) {
+                if (p->pinned && p->pinned[v])
+                    continue; /* exactly where the outline was fitted, not 1e-8 off */
                 p->uv[2 * v] = previous_uv[2 * v] + t * (s[v] - previous_uv[2 * v]);
                 p->uv[2 * v + 1] = previous_uv[2 * v + 1] + t * (s[n + v] - previous_uv[2 * v + 1]);
             }
@@ -1050,56 +1079,528 @@ typedef struct sm_outcome {
     int global_iterations;
 } sm_outcome;
 
-/* Flattens one disk mesh into uv (nv x 2); fills map (nv, may be NULL) and
- * line/line_count (may be NULL). */
-static pz_status flatten_disk(const pz_mesh *mesh, const sm_settings *settings, double *uv, double *map,
-                              int32_t *line, int32_t *line_count, sm_outcome *outcome, pz_ctx *ctx)
+/* Phase two (wang2002 Sec. 5-6.2): the global release (isotropic), then the node sweeps. Also releases a
+ * matched panel's interior against its pinned outline. */
+static pz_status panel_release(sm_panel *p, sm_outcome *outcome, pz_ctx *ctx)
+{
+    pz_status status = PZ_OK;
+    if (!p->settings->orthotropic && !p->settings->local_only) {
+        outcome->global_iterations += global_release(p, ctx, &status);
+        if (status)
+            return status;
+    }
+    p->omega = PHASE_TWO_OMEGA;
+    double *backup = malloc((size_t)p->nv * 2 * sizeof(double) + 1);
+    if (!backup)
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    int sweeps = 0;
+    outcome->stop = energy_release(p, p->settings->max_iterations, backup, &sweeps);
+    outcome->iterations += sweeps;
+    free(backup);
+    return PZ_OK;
+}
+
+/* Phase one and phase two of one disk mesh into uv (nv x 2), the state kept in p for seam matching and
+ * panel_finish. */
+static pz_status panel_flatten(sm_panel *p, const pz_mesh *mesh, const sm_settings *settings, double *uv,
+                               sm_outcome *outcome, pz_ctx *ctx)
+{
+    double start = pz_seconds();
+    pz_status status = panel_init(p, mesh, settings, uv, ctx);
+    if (!status)
+        status = phase_one(p, ctx);
+    if (status)
+        return status;
+    outcome->phase_one_ms = 1e3 * (pz_seconds() - start);
+    outcome->phase_one_relaxations = p->relaxations;
+    outcome->phase_one_energy = total_energy(p);
+    start = pz_seconds();
+    status = panel_release(p, outcome, ctx);
+    outcome->phase_two_ms = 1e3 * (pz_seconds() - start);
+    return status;
+}
+
+/* The panel's last steps: folds untangled, its figures, energy map and cutting line (map and line may be
+ * NULL). */
+static pz_status panel_finish(sm_panel *p, sm_outcome *outcome, double *map, int32_t *line, int32_t *line_count,
+                              pz_ctx *ctx)
+{
+    /* folds left by phase one (the shared mannequin: 76 faces, 35 after this): the
+     * springs have no barrier, so unflip them geometrically (no flip added; a matched outline stays) */
+    if (flipped_faces(p) > 0 && pz_param_untangle(p->mesh, p->pinned, p->uv) < 0)
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    outcome->final_energy = total_energy(p);
+    accuracy(p, &outcome->e_area, &outcome->e_shape);
+    if (map)
+        energy_map(p, map);
+    if (map && line)
+        *line_count = crest_line(p, map, line);
+    outcome->relaxations = p->relaxations;
+    outcome->evaluations = p->evaluations;
+    return PZ_OK;
+}
+
+/* Flattens one disk mesh on its own into uv (nv x 2): the trial cut's re-flattening. */
+static pz_status flatten_disk(const pz_mesh *mesh, const sm_settings *settings, double *uv, sm_outcome *outcome,
+                              pz_ctx *ctx)
 {
     sm_panel p;
-    double start = pz_seconds();
-    pz_status status = panel_init(&p, mesh, settings, uv, ctx);
+    pz_status status = panel_flatten(&p, mesh, settings, uv, outcome, ctx);
     if (!status)
-        status = phase_one(&p, ctx);
-    if (status) {
-        panel_free(&p);
-        return status;
+        status = panel_finish(&p, outcome, NULL, NULL, NULL, ctx);
+    panel_free(&p);
+    return status;
+}
+
+/* ------------------------------------------------------------------------ */
+/* Seam matching                                                             */
+/* ------------------------------------------------------------------------ */
+
+/*
+ * Sewing needs the two sides of a seam (the two legs of a dart) to have the
+ * same length. Flattened alone, each panel's springs give its outline their
+ * own compromise, and the sides of a seam came out up to 13 % apart on the
+ * shared garments (docs/springmass.md). So every pair of facing segments
+ * (a_i a_i+1 on one side, b_i b_i+1 on the other, as the pattern pairs
+ * them; a dart's legs out to the tip) is a link, and after phase two both
+ * segments get the mean of their 2D lengths. Each panel's outline is then
+ * refitted with those edge lengths exactly (fit_loop: wang2008's
+ * length-preserving boundary, Eqs. 2-8 for one loop, the target angles
+ * being the outline's own turning angles, so it moves as little as the new
+ * lengths allow), and its interior is released again with the outline
+ * pinned. Matching segment by segment keeps facing notches together; only
+ * lengths are shared, each panel keeps its own shape. A penalty coupling in
+ * the releases was tried first: with stiff links the local-global release
+ * converged slowly and panels held by the flip guard kept their partners
+ * from matching (0.1-1.1 % left on the shared garments, energy up 30-150 %).
+ */
+typedef struct sm_link {
+    int32_t curve;            /* seam s, or seam_count + dart d */
+    int32_t panel[2];         /* side a's and side b's panel */
+    int32_t end[2][2];        /* each side's segment: two local vertices of its panel */
+    double rest;              /* mean 3D length of the two segments */
+} sm_link;
+
+#define FIT_ITERATIONS 50     /* optimality steps of fit_loop (Newton stops in under 10 on the tests) */
+#define FIT_FEASIBLE 1e-13    /* scaled closure residual the feasibility steps aim for */
+#define FIT_ACCEPT 1e-9       /* an outline left with a larger residual is not matched */
+
+/* Appends the links of one seam (tip < 0) or dart: facing segments (a[i], a[i+1]) / (b[i], b[i+1]) and, for
+ * a dart, (a[n-1], tip) / (b[n-1], tip). owner/local: pattern vertex -> panel and local vertex. */
+static void add_links(sm_link *links, int32_t *count, const pz_mesh *mesh, const int32_t *owner,
+                      const int32_t *local, int32_t curve, const int32_t *a, const int32_t *b, int32_t n,
+                      int32_t tip)
+{
+    for (int32_t i = 0; i + 1 < n || (tip >= 0 && i < n); ++i) {
+        int32_t ends[2][2] = {{a[i], i + 1 < n ? a[i + 1] : tip}, {b[i], i + 1 < n ? b[i + 1] : tip}};
+        sm_link *l = &links[*count];
+        int usable = 1;
+        for (int side = 0; side < 2; ++side) {
+            usable &= ends[side][0] != ends[side][1] && owner[ends[side][0]] == owner[ends[side][1]];
+            l->panel[side] = owner[ends[side][0]];
+            l->end[side][0] = local[ends[side][0]];
+            l->end[side][1] = local[ends[side][1]];
+        }
+        if (!usable)
+            continue;
+        l->curve = curve;
+        l->rest = (dist3d(mesh->positions + 3 * ends[0][0], mesh->positions + 3 * ends[0][1]) +
+                   dist3d(mesh->positions + 3 * ends[1][0], mesh->positions + 3 * ends[1][1])) / 2;
+        ++*count;
     }
-    outcome->phase_one_ms = 1e3 * (pz_seconds() - start);
-    outcome->phase_one_relaxations = p.relaxations;
-    outcome->phase_one_energy = total_energy(&p);
-    start = pz_seconds();
-    if (!settings->orthotropic && !settings->local_only) {
-        outcome->global_iterations = global_release(&p, ctx, &status);
-        if (status) {
-            panel_free(&p);
-            return status;
+}
+
+/* The links of every seam and dart; vertex_maps[k]: panel k's local -> pattern vertex. -1 when out of
+ * memory, else the count. */
+static int32_t build_links(const pz_pattern *pattern, int32_t *const *vertex_maps, const sm_panel *panels,
+                           sm_link **out)
+{
+    int32_t nv = pattern->mesh->vertex_count, count = 0;
+    size_t capacity = 0;
+    for (int32_t s = 0; s < pattern->seam_count; ++s)
+        capacity += (size_t)pattern->seams[s].pair_count;
+    for (int32_t d = 0; d < pattern->dart_count; ++d)
+        capacity += (size_t)pattern->darts[d].pair_count;
+    int32_t *owner = malloc((size_t)nv * sizeof(int32_t) + 1), *local = malloc((size_t)nv * sizeof(int32_t) + 1);
+    sm_link *links = malloc(capacity * sizeof(sm_link) + 1);
+    if (!owner || !local || !links) {
+        free(owner);
+        free(local);
+        free(links);
+        return -1;
+    }
+    for (int32_t k = 0; k < pattern->panel_count; ++k)
+        for (int32_t v = 0; v < panels[k].nv; ++v) {
+            owner[vertex_maps[k][v]] = k;
+            local[vertex_maps[k][v]] = v;
+        }
+    for (int32_t s = 0; s < pattern->seam_count; ++s)
+        add_links(links, &count, pattern->mesh, owner, local, s, pattern->seams[s].side_a, pattern->seams[s].side_b,
+                  pattern->seams[s].pair_count, -1);
+    for (int32_t d = 0; d < pattern->dart_count; ++d)
+        add_links(links, &count, pattern->mesh, owner, local, pattern->seam_count + d, pattern->darts[d].leg_a,
+                  pattern->darts[d].leg_b, pattern->darts[d].pair_count, pattern->darts[d].tip);
+    free(owner);
+    free(local);
+    *out = links;
+    return count;
+}
+
+/* The panel's boundary loop and each vertex's place in it; 0 when out of memory (a panel with several loops
+ * gets loop_count 0: not matched). */
+static int panel_loop(sm_panel *p, pz_ctx *ctx)
+{
+    pz_loops *loops = NULL;
+    if (pz_topology_boundary_loops(p->topology, &loops, ctx))
+        return 0;
+    p->loop_position = malloc((size_t)p->nv * sizeof(int32_t) + 1);
+    p->loop = malloc((size_t)loops->loop_offsets[loops->loop_count] * sizeof(int32_t) + 1);
+    if (!p->loop_position || !p->loop) {
+        pz_loops_free(&loops);
+        return 0;
+    }
+    for (int32_t v = 0; v < p->nv; ++v)
+        p->loop_position[v] = -1;
+    if (loops->loop_count == 1) {
+        p->loop_count = loops->loop_offsets[1];
+        memcpy(p->loop, loops->loop_vertices, (size_t)p->loop_count * sizeof(int32_t));
+        for (int32_t i = 0; i < p->loop_count; ++i)
+            p->loop_position[p->loop[i]] = i;
+    }
+    pz_loops_free(&loops);
+    return 1;
+}
+
+/* The shorter run of loop edges between local vertices a and b: edges first .. first + count - 1 (mod n);
+ * 0 when either is not on the loop. */
+static int loop_path(const sm_panel *p, int32_t a, int32_t b, int32_t *first, int32_t *count)
+{
+    int32_t n = p->loop_count, i = p->loop_position[a], j = p->loop_position[b];
+    if (i < 0 || j < 0 || i == j)
+        return 0;
+    int32_t forward = ((j - i) % n + n) % n;
+    *first = forward <= n - forward ? i : j;
+    *count = forward <= n - forward ? forward : n - forward;
+    return 1;
+}
+
+static double loop_edge(const sm_panel *p, const double *uv, int32_t i)
+{
+    return dist2d(uv + 2 * p->loop[i], uv + 2 * p->loop[(i + 1) % p->loop_count]);
+}
+
+static double path_length(const sm_panel *p, int32_t first, int32_t count)
+{
+    double sum = 0;
+    for (int32_t k = 0; k < count; ++k)
+        sum += loop_edge(p, p->uv, (first + k) % p->loop_count);
+    return sum;
+}
+
+/* Solves the 3 x 3 symmetric positive system a x = b (Cholesky); 0 when not definite. */
+static int solve3(double a[3][3], const double b[3], double x[3])
+{
+    double l[3][3] = {{0}};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j <= i; ++j) {
+            double sum = a[i][j];
+            for (int k = 0; k < j; ++k)
+                sum -= l[i][k] * l[j][k];
+            if (i == j) {
+                if (!(sum > 0))
+                    return 0;
+                l[i][i] = sqrt(sum);
+            } else {
+                l[i][j] = sum / l[j][j];
+            }
+        }
+    double y[3];
+    for (int i = 0; i < 3; ++i) {
+        y[i] = b[i];
+        for (int k = 0; k < i; ++k)
+            y[i] -= l[i][k] * y[k];
+        y[i] /= l[i][i];
+    }
+    for (int i = 2; i >= 0; --i) {
+        x[i] = y[i];
+        for (int k = i + 1; k < 3; ++k)
+            x[i] -= l[k][i] * x[k];
+        x[i] /= l[i][i];
+    }
+    return 1;
+}
+
+/*
+ * Edge directions phi (phi_0 fixed, phi_i = phi_{i-1} + tau_i), the constraint
+ * residuals g (turning, closure x and y over the perimeter L) and the suffix
+ * sums of l sin phi and l cos phi that make the Jacobian (wang2008 Eqs. 17-19).
+ */
+static void fit_evaluate(int32_t n, const double *length, double perimeter, double total, double phi0,
+                         const double *tau, double *phi, double *suffix_sin, double *suffix_cos, double g[3])
+{
+    double turning = tau[0];
+    phi[0] = phi0;
+    for (int32_t i = 1; i < n; ++i) {
+        phi[i] = phi[i - 1] + tau[i];
+        turning += tau[i];
+    }
+    double s = 0, c = 0;
+    for (int32_t i = n - 1; i >= 0; --i) {
+        s += length[i] * sin(phi[i]) / perimeter;
+        c += length[i] * cos(phi[i]) / perimeter;
+        suffix_sin[i] = s;
+        suffix_cos[i] = c;
+    }
+    g[0] = turning - total;
+    g[1] = c;
+    g[2] = s;
+}
+
+/*
+ * Refits the panel's outline to the edge lengths `length` (loop edge i from
+ * loop[i] to loop[i+1]): the closed polygon whose turning angles tau are
+ * nearest, in least squares, to the outline's current ones tau0 (wang2008
+ * Eq. 2 for one loop: sum tau = the current total turning, the loop closes).
+ * Sequential linearly constrained steps (Eqs. 5-7, J J^T is 3 x 3), then
+ * feasibility steps; the new outline is laid from loop[0] along edge 0's
+ * direction and moved rigidly onto the old one (least squares). Writes out
+ * (loop_count x 2); returns the scaled residual (HUGE_VAL when it failed).
+ * scratch: 6 x loop_count doubles.
+ */
+static double fit_loop(const sm_panel *p, const double *length, double *out, double *scratch)
+{
+    int32_t n = p->loop_count;
+    double *tau0 = scratch, *tau = tau0 + n, *phi = tau + n, *ss = phi + n, *sc = ss + n, *delta = sc + n;
+    double perimeter = 0, turning = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        const double *a = p->uv + 2 * p->loop[(i + n - 1) % n], *b = p->uv + 2 * p->loop[i],
+                     *c = p->uv + 2 * p->loop[(i + 1) % n];
+        double d1[2] = {b[0] - a[0], b[1] - a[1]}, d2[2] = {c[0] - b[0], c[1] - b[1]};
+        tau0[i] = tau[i] = atan2(d1[0] * d2[1] - d1[1] * d2[0], d1[0] * d2[0] + d1[1] * d2[1]);
+        turning += tau0[i];
+        perimeter += length[i];
+    }
+    const double *b0 = p->uv + 2 * p->loop[0], *b1 = p->uv + 2 * p->loop[1 % n];
+    double phi0 = atan2(b1[1] - b0[1], b1[0] - b0[0]), total = 2 * SM_PI * nearbyint(turning / (2 * SM_PI)), g[3];
+    if (n < 3 || !(perimeter > 0))
+        return HUGE_VAL;
+    for (int iteration = 0, feasibility = 0; iteration < FIT_ITERATIONS + 20; ++iteration) {
+        fit_evaluate(n, length, perimeter, total, phi0, tau, phi, ss, sc, g);
+        if (feasibility && fmax(fabs(g[0]), fmax(fabs(g[1]), fabs(g[2]))) < FIT_FEASIBLE)
+            break;
+        /* J: row 0 all ones; rows 1, 2 at column j >= 1: -suffix_sin[j], suffix_cos[j] (column 0: 0, 0) */
+        double jj[3][3] = {{0}}, rhs[3] = {g[0], g[1], g[2]}, mu[3], step2 = 0;
+        for (int32_t j = 0; j < n; ++j) {
+            double col[3] = {1, j ? -ss[j] : 0, j ? sc[j] : 0}, r = feasibility ? 0 : tau0[j] - tau[j];
+            for (int a = 0; a < 3; ++a) {
+                rhs[a] += col[a] * r;
+                for (int b = 0; b < 3; ++b)
+                    jj[a][b] += col[a] * col[b];
+            }
+        }
+        for (int a = 0; a < 3; ++a)
+            jj[a][a] += 1e-14 * n;
+        if (!solve3(jj, rhs, mu))
+            return HUGE_VAL;
+        for (int32_t j = 0; j < n; ++j) {
+            double col[3] = {1, j ? -ss[j] : 0, j ? sc[j] : 0};
+            delta[j] = (feasibility ? 0 : tau0[j] - tau[j]) - col[0] * mu[0] - col[1] * mu[1] - col[2] * mu[2];
+            step2 += delta[j] * delta[j];
+        }
+        for (int32_t j = 0; j < n; ++j)
+            tau[j] += delta[j];
+        if (feasibility)
+            ++feasibility;
+        else if (step2 / n < 1e-24 || iteration + 1 >= FIT_ITERATIONS)
+            feasibility = 1;
+    }
+    fit_evaluate(n, length, perimeter, total, phi0, tau, phi, ss, sc, g);
+    double residual = fmax(fabs(g[0]), fmax(fabs(g[1]), fabs(g[2])));
+    if (!(residual <= FIT_ACCEPT))
+        return HUGE_VAL;
+    /* lay it out (Eq. 8), then the rigid motion onto the old outline */
+    double old_centre[2] = {0, 0}, new_centre[2] = {0, 0}, dot = 0, cross = 0;
+    out[0] = out[1] = 0;
+    for (int32_t i = 0; i + 1 < n; ++i) {
+        out[2 * (i + 1)] = out[2 * i] + length[i] * cos(phi[i]);
+        out[2 * (i + 1) + 1] = out[2 * i + 1] + length[i] * sin(phi[i]);
+    }
+    for (int32_t i = 0; i < n; ++i)
+        for (int k = 0; k < 2; ++k) {
+            old_centre[k] += p->uv[2 * p->loop[i] + k] / n;
+            new_centre[k] += out[2 * i + k] / n;
+        }
+    for (int32_t i = 0; i < n; ++i) {
+        double x = out[2 * i] - new_centre[0], y = out[2 * i + 1] - new_centre[1];
+        double u = p->uv[2 * p->loop[i]] - old_centre[0], v = p->uv[2 * p->loop[i] + 1] - old_centre[1];
+        dot += x * u + y * v;
+        cross += x * v - y * u;
+    }
+    double angle = atan2(cross, dot), c = cos(angle), s = sin(angle);
+    for (int32_t i = 0; i < n; ++i) {
+        double x = out[2 * i] - new_centre[0], y = out[2 * i + 1] - new_centre[1];
+        out[2 * i] = old_centre[0] + c * x - s * y;
+        out[2 * i + 1] = old_centre[1] + s * x + c * y;
+    }
+    return residual;
+}
+
+/* Every link's mean length onto both its sides (scaling the loop edges of each side's run); marks the
+ * panels that have a link. targets[k]: panel k's loop edge lengths, preset to the current ones. */
+static void link_targets(const sm_panel *panels, const sm_link *links, int32_t link_count, double **targets,
+                         uint8_t *linked)
+{
+    for (int32_t i = 0; i < link_count; ++i) {
+        const sm_link *l = &links[i];
+        int32_t first[2], count[2];
+        double length[2];
+        int usable = 1;
+        for (int side = 0; side < 2 && usable; ++side) {
+            const sm_panel *p = &panels[l->panel[side]];
+            usable = p->loop_count > 0 && loop_path(p, l->end[side][0], l->end[side][1], &first[side], &count[side]);
+            length[side] = usable ? path_length(p, first[side], count[side]) : 0;
+            usable &= length[side] > 0;
+        }
+        if (!usable)
+            continue;
+        double mean = (length[0] + length[1]) / 2;
+        for (int side = 0; side < 2; ++side) {
+            const sm_panel *p = &panels[l->panel[side]];
+            for (int32_t k = 0; k < count[side]; ++k) {
+                int32_t e = (first[side] + k) % p->loop_count;
+                targets[l->panel[side]][e] = loop_edge(p, p->uv, e) * mean / length[side];
+            }
+            linked[l->panel[side]] = 1;
         }
     }
-    p.omega = PHASE_TWO_OMEGA;
-    double *backup = malloc((size_t)p.nv * 2 * sizeof(double) + 1);
-    if (!backup) {
-        panel_free(&p);
-        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+}
+
+/* Faces still flipped after untangling a copy of the panel with `fixed` vertices kept; -1 when out of memory.
+ * copy: nv x 2 scratch. */
+static int32_t flips_left(sm_panel *p, const uint8_t *fixed, double *copy)
+{
+    double *uv = p->uv;
+    memcpy(copy, uv, (size_t)p->nv * 2 * sizeof(double));
+    p->uv = copy;
+    int32_t flipped = flipped_faces(p);
+    if (flipped > 0)
+        flipped = pz_param_untangle(p->mesh, fixed, copy) < 0 ? -1 : flipped_faces(p);
+    p->uv = uv;
+    return flipped;
+}
+
+/* Refits one linked panel's outline to its targets, pins it and releases the interior again. Returns 1 when
+ * matched; 0 (the panel as it was) when the outline could not be refitted or when the matched panel would
+ * keep more flipped faces than the unmatched one (a fold the pinned outline does not let go, e.g. an ear
+ * triangle turned over by the refit). */
+static int match_panel(sm_panel *p, const double *target, sm_outcome *outcome, double *scratch, pz_ctx *ctx,
+                       pz_status *status)
+{
+    double *fitted = scratch + 6 * (size_t)p->loop_count;
+    size_t bytes = (size_t)p->nv * 2 * sizeof(double);
+    double *before = malloc(bytes + 1), *copy = malloc(bytes + 1);
+    sm_outcome unmatched = *outcome;
+    int matched = 0;
+    p->pinned = calloc((size_t)p->nv + 1, 1);
+    *status = PZ_OK;
+    if (!before || !copy || !p->pinned) {
+        *status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+        goto done;
     }
-    outcome->stop = energy_release(&p, settings->max_iterations, backup, &outcome->iterations);
-    free(backup);
-    /* folds left by phase one (the shared mannequin: 76 faces, 35 after this): the
-     * springs have no barrier, so unflip them geometrically (no flip added) */
-    if (flipped_faces(&p) > 0 && pz_param_untangle(mesh, NULL, uv) < 0) {
-        panel_free(&p);
-        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    if (fit_loop(p, target, fitted, scratch) == HUGE_VAL)
+        goto done;
+    memcpy(before, p->uv, bytes);
+    int32_t alone = flips_left(p, NULL, copy);
+    for (int32_t i = 0; i < p->loop_count; ++i) {
+        p->uv[2 * p->loop[i]] = fitted[2 * i];
+        p->uv[2 * p->loop[i] + 1] = fitted[2 * i + 1];
+        p->pinned[p->loop[i]] = 1;
     }
-    outcome->phase_two_ms = 1e3 * (pz_seconds() - start);
-    outcome->final_energy = total_energy(&p);
-    accuracy(&p, &outcome->e_area, &outcome->e_shape);
-    if (map)
-        energy_map(&p, map);
-    if (map && line)
-        *line_count = crest_line(&p, map, line);
-    outcome->relaxations = p.relaxations;
-    outcome->evaluations = p.evaluations;
-    panel_free(&p);
-    return PZ_OK;
+    if ((*status = panel_release(p, outcome, ctx)))
+        goto done;
+    int32_t together = flips_left(p, p->pinned, copy);
+    if (alone < 0 || together < 0)
+        *status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    matched = !*status && together <= alone;
+    if (!matched) {
+        memcpy(p->uv, before, bytes);
+        int work = outcome->global_iterations;
+        *outcome = unmatched;
+        outcome->global_iterations = work; /* the work was done all the same */
+    }
+done:
+    free(before);
+    free(copy);
+    if (!matched) {
+        free(p->pinned);
+        p->pinned = NULL;
+    }
+    return matched;
+}
+
+/* Seam matching of all panels (see sm_link); counts the panels it could not refit. */
+static pz_status match_seams(sm_panel *panels, int32_t panel_count, const sm_link *links, int32_t link_count,
+                             sm_outcome *outcomes, int32_t *unmatched, pz_ctx *ctx)
+{
+    double **targets = calloc((size_t)panel_count + 1, sizeof(double *));
+    uint8_t *linked = calloc((size_t)panel_count + 1, 1);
+    double *scratch = NULL;
+    pz_status status = PZ_OK;
+    size_t most = 0;
+    if (!targets || !linked)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    for (int32_t k = 0; k < panel_count && !status; ++k) {
+        sm_panel *p = &panels[k];
+        if (!(targets[k] = malloc((size_t)p->loop_count * sizeof(double) + 1))) {
+            status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+            break;
+        }
+        for (int32_t i = 0; i < p->loop_count; ++i)
+            targets[k][i] = loop_edge(p, p->uv, i);
+        most = (size_t)p->loop_count > most ? (size_t)p->loop_count : most;
+    }
+    if (!status && !(scratch = malloc(most * 8 * sizeof(double) + 1)))
+        status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    if (!status)
+        link_targets(panels, links, link_count, targets, linked);
+    for (int32_t k = 0; k < panel_count && !status; ++k) {
+        if (!linked[k])
+            continue;
+        double start = pz_seconds();
+        *unmatched += !match_panel(&panels[k], targets[k], &outcomes[k], scratch, ctx, &status);
+        outcomes[k].phase_two_ms += 1e3 * (pz_seconds() - start);
+    }
+    for (int32_t k = 0; targets && k < panel_count; ++k)
+        free(targets[k]);
+    free(targets);
+    free(linked);
+    free(scratch);
+    return status;
+}
+
+/* Worst |side a - side b| / 3D length over the seams and darts (sums over their links, lengths along the
+ * outline between each link's ends, straight when its panel has no loop). curve_count: seams + darts. */
+static double worst_mismatch(const sm_panel *panels, const sm_link *links, int32_t link_count, int32_t curve_count)
+{
+    double *sums = calloc((size_t)curve_count * 3 + 1, sizeof(double)), worst = 0;
+    if (!sums)
+        return NAN;
+    for (int32_t i = 0; i < link_count; ++i) {
+        const sm_link *l = &links[i];
+        for (int side = 0; side < 2; ++side) {
+            const sm_panel *p = &panels[l->panel[side]];
+            int32_t first, count;
+            sums[3 * l->curve + side] += p->loop_count > 0 && loop_path(p, l->end[side][0], l->end[side][1], &first, &count)
+                                             ? path_length(p, first, count)
+                                             : dist2d(p->uv + 2 * l->end[side][0], p->uv + 2 * l->end[side][1]);
+        }
+        sums[3 * l->curve + 2] += l->rest;
+    }
+    for (int32_t c = 0; c < curve_count; ++c)
+        if (sums[3 * c + 2] > 0)
+            worst = fmax(worst, fabs(sums[3 * c] - sums[3 * c + 1]) / sums[3 * c + 2]);
+    free(sums);
+    return worst;
 }
 
 /* Signed area between the two sides of the cut (> 0: they splay apart). */
@@ -1183,7 +1684,7 @@ static pz_status trial_cut(const pz_mesh *panel_mesh, const sm_settings *setting
         goto done;
     }
     sm_outcome outcome = {0};
-    status = flatten_disk(cut, settings, uv, NULL, NULL, NULL, &outcome, ctx);
+    status = flatten_disk(cut, settings, uv, &outcome, ctx);
     if (status)
         goto done;
     out->cut_energy = outcome.final_energy;
@@ -1231,79 +1732,225 @@ static void settings_from(const pz_springmass_options *options, sm_settings *s)
     s->accuracy = options->accuracy > 0 ? options->accuracy : 0.01;
     s->energy_variation = options->energy_variation > 0 ? options->energy_variation : 0.0005;
     s->local_only = options->local_release_only;
+    s->independent = options->independent_panels;
 }
 
-/* One panel of the pattern: extract, flatten, write back, fill its record. */
-static pz_status flatten_panel(const pz_pattern *pattern, int32_t panel, const int32_t *faces, int32_t face_count,
-                               const sm_settings *settings, int do_trial_cut, double *uv,
-                               pz_springmass_result *result, pz_ctx *ctx)
+/* One panel of the pattern: its own mesh and buffers, kept until every panel is flattened (seam matching). */
+typedef struct sm_piece {
+    pz_mesh *mesh;
+    int32_t *vertex_map;       /* local -> pattern vertex */
+    double *uv, *map;
+    int32_t *line, line_count;
+    sm_settings retry;         /* the settings of a retry (its panel points to them) */
+} sm_piece;
+
+static void pieces_free(sm_piece *pieces, sm_panel *panels, int32_t count)
 {
-    pz_mesh *mesh = NULL;
-    int32_t *vertex_map = NULL, *line = NULL, line_count = 0;
-    double *local_uv = NULL, *map = NULL;
-    if (face_count == 0)
-        return pz_error(ctx, PZ_ERR_DATA, "springmass: panel %d has no faces", (int)panel);
-    pz_status status = pz_mesh_extract(pattern->mesh, faces, face_count, &mesh, &vertex_map, NULL, ctx);
+    for (int32_t k = 0; pieces && k < count; ++k) {
+        if (panels)
+            panel_free(&panels[k]);
+        pz_mesh_free(&pieces[k].mesh);
+        free(pieces[k].vertex_map);
+        free(pieces[k].uv);
+        free(pieces[k].map);
+        free(pieces[k].line);
+    }
+    free(pieces);
+    free(panels);
+}
+
+/* Flipped faces plus crossings of the outline; -1 when out of memory. */
+static int32_t panel_defects(const sm_panel *p)
+{
+    int32_t *edges = malloc((size_t)p->loop_count * 2 * sizeof(int32_t) + 1);
+    if (!edges)
+        return -1;
+    for (int32_t i = 0; i < p->loop_count; ++i) {
+        edges[2 * i] = p->loop[i];
+        edges[2 * i + 1] = p->loop[(i + 1) % p->loop_count];
+    }
+    int32_t crossings = pz_metrics_outline_crossings(edges, p->loop_count, p->uv);
+    free(edges);
+    return crossings < 0 ? -1 : crossings + flipped_faces(p);
+}
+
+/*
+ * Second tries for a panel that ends phase two folded (flipped faces) or with
+ * its outline crossing itself. Heap relaxation relaxes a few nodes per
+ * triangle, and once in a while its phase one leaves a basin the releases
+ * cannot leave: the generated bodice's back came out with a crossing
+ * outline, energy 823 where full relaxation and 8 heap paths give 341. Such
+ * a panel is flattened again with RETRY_PATHS heap paths (IISERM's
+ * multi-path); if that is still folded (phase one itself tangles on the
+ * shared head scans, one panel each), phase two starts from the panel's LSCM
+ * instead of phase one (our addition, not the papers'). The best of the tries
+ * is kept: fewer defects, else less energy. The cost is paid only there.
+ */
+#define RETRY_PATHS 8
+
+/* Phase two from the panel's LSCM (area-scaled, grain along +v) instead of phase one. */
+static pz_status panel_from_lscm(sm_panel *p, const pz_mesh *mesh, const sm_settings *settings, double *uv,
+                                 sm_outcome *outcome, pz_ctx *ctx)
+{
+    double start = pz_seconds();
+    pz_status status = panel_init(p, mesh, settings, uv, ctx);
+    if (!status)
+        status = pz_param_lscm(mesh, settings->grain, uv, ctx);
     if (status)
         return status;
-    size_t nv = (size_t)mesh->vertex_count;
-    local_uv = malloc(nv * 2 * sizeof(double) + 1);
-    map = malloc(nv * sizeof(double) + 1);
-    line = malloc(nv * sizeof(int32_t) + 1);
-    if (!local_uv || !map || !line) {
+    for (int32_t f = 0; f < p->nf; ++f)
+        activate_face(p, f);
+    for (int32_t v = 0; v < p->nv; ++v)
+        place_vertex(p, v);
+    outcome->phase_one_ms = 1e3 * (pz_seconds() - start);
+    outcome->phase_one_energy = total_energy(p);
+    start = pz_seconds();
+    status = panel_release(p, outcome, ctx);
+    outcome->phase_two_ms = 1e3 * (pz_seconds() - start);
+    return status;
+}
+
+/* Panel k flattened again (with_lscm 0: RETRY_PATHS heap paths, 1: from LSCM); kept when better, updating
+ * *defects. */
+static pz_status retry_piece(sm_piece *piece, sm_panel *panel, sm_outcome *outcome, int with_lscm, int32_t *defects,
+                             pz_ctx *ctx)
+{
+    sm_panel second;
+    sm_outcome second_outcome = {0};
+    size_t bytes = (size_t)panel->nv * 2 * sizeof(double);
+    double *uv = malloc(bytes + 1);
+    piece->retry = *panel->settings;
+    piece->retry.paths = with_lscm ? piece->retry.paths : RETRY_PATHS;
+    memset(&second, 0, sizeof second);
+    pz_status status = !uv ? pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory")
+                       : with_lscm ? panel_from_lscm(&second, piece->mesh, &piece->retry, uv, &second_outcome, ctx)
+                                   : panel_flatten(&second, piece->mesh, &piece->retry, uv, &second_outcome, ctx);
+    if (!status && !panel_loop(&second, ctx))
         status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
-        goto done;
+    int32_t second_defects = status ? -1 : panel_defects(&second);
+    if (!status && second_defects < 0)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    if (!status && (second_defects < *defects ||
+                    (second_defects == *defects && total_energy(&second) < total_energy(panel)))) {
+        long long work = panel->relaxations;
+        double ms = outcome->phase_one_ms + outcome->phase_two_ms;
+        panel_free(panel);
+        *panel = second;
+        memcpy(piece->uv, uv, bytes);
+        panel->uv = piece->uv;
+        panel->relaxations += work; /* every try counts */
+        *outcome = second_outcome;
+        outcome->phase_one_ms += ms;
+        *defects = second_defects;
+    } else {
+        panel_free(&second);
     }
-    sm_outcome outcome = {0};
-    status = flatten_disk(mesh, settings, local_uv, map, line, &line_count, &outcome, ctx);
+    free(uv);
+    return status;
+}
+
+/* Extracts panel k and runs its phase one and two (and second tries when it ends folded). */
+static pz_status start_piece(const pz_pattern *pattern, const int32_t *faces, int32_t face_count, int32_t k,
+                             const sm_settings *settings, sm_piece *piece, sm_panel *panel, sm_outcome *outcome,
+                             int32_t *retried, pz_ctx *ctx)
+{
+    if (face_count == 0)
+        return pz_error(ctx, PZ_ERR_DATA, "springmass: panel %d has no faces", (int)k);
+    pz_status status = pz_mesh_extract(pattern->mesh, faces, face_count, &piece->mesh, &piece->vertex_map, NULL, ctx);
     if (status)
-        goto done;
-    for (size_t v = 0; v < nv; ++v) {
-        uv[2 * vertex_map[v]] = local_uv[2 * v];
-        uv[2 * vertex_map[v] + 1] = local_uv[2 * v + 1];
+        return status;
+    size_t nv = (size_t)piece->mesh->vertex_count;
+    piece->uv = malloc(nv * 2 * sizeof(double) + 1);
+    piece->map = malloc(nv * sizeof(double) + 1);
+    piece->line = malloc(nv * sizeof(int32_t) + 1);
+    if (!piece->uv || !piece->map || !piece->line)
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    if ((status = panel_flatten(panel, piece->mesh, settings, piece->uv, outcome, ctx)))
+        return status;
+    if (!panel_loop(panel, ctx))
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    int32_t defects = panel_defects(panel);
+    if (defects < 0)
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    *retried += defects > 0;
+    if (defects > 0 && settings->heap && settings->paths < RETRY_PATHS)
+        status = retry_piece(piece, panel, outcome, 0, &defects, ctx);
+    if (!status && defects > 0)
+        status = retry_piece(piece, panel, outcome, 1, &defects, ctx);
+    return status;
+}
+
+/* Writes panel k's coordinates back and fills its record (trial cut when asked). */
+static pz_status record_piece(const sm_piece *piece, const sm_outcome *outcome, int32_t panel,
+                              const sm_settings *settings, int do_trial_cut, double *uv, pz_springmass_result *result,
+                              pz_ctx *ctx)
+{
+    int32_t nv = piece->mesh->vertex_count;
+    for (int32_t v = 0; v < nv; ++v) {
+        uv[2 * piece->vertex_map[v]] = piece->uv[2 * v];
+        uv[2 * piece->vertex_map[v] + 1] = piece->uv[2 * v + 1];
     }
     if (!result)
-        goto done;
+        return PZ_OK;
     pz_springmass_panel *record = &result->panels[panel];
     record->panel = panel;
-    record->stop = outcome.stop;
-    record->iterations = outcome.iterations;
-    record->global_iterations = outcome.global_iterations;
-    record->phase_one_energy = outcome.phase_one_energy;
-    record->final_energy = outcome.final_energy;
-    record->e_area = outcome.e_area;
-    record->e_shape = outcome.e_shape;
+    record->stop = outcome->stop;
+    record->iterations = outcome->iterations;
+    record->global_iterations = outcome->global_iterations;
+    record->phase_one_energy = outcome->phase_one_energy;
+    record->final_energy = outcome->final_energy;
+    record->e_area = outcome->e_area;
+    record->e_shape = outcome->e_shape;
     int32_t top = 0;
-    for (size_t v = 0; v < nv; ++v) {
-        result->vertex_energy[vertex_map[v]] = map[v];
-        if (map[v] > map[top])
-            top = (int32_t)v;
+    for (int32_t v = 0; v < nv; ++v) {
+        result->vertex_energy[piece->vertex_map[v]] = piece->map[v];
+        if (piece->map[v] > piece->map[top])
+            top = v;
     }
-    record->max_energy_vertex = vertex_map[top];
-    if (do_trial_cut && line_count >= 2)
-        status = trial_cut(mesh, settings, line, line_count, record, ctx);
-    record->cut_vertices = malloc((size_t)line_count * sizeof(int32_t) + 1);
-    if (!record->cut_vertices) {
-        status = status ? status : pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
-        goto done;
+    record->max_energy_vertex = piece->vertex_map[top];
+    pz_status status = PZ_OK;
+    if (do_trial_cut && piece->line_count >= 2)
+        status = trial_cut(piece->mesh, settings, piece->line, piece->line_count, record, ctx);
+    record->cut_vertices = malloc((size_t)piece->line_count * sizeof(int32_t) + 1);
+    if (!record->cut_vertices)
+        return status ? status : pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    for (int32_t i = 0; i < piece->line_count; ++i)
+        record->cut_vertices[i] = piece->vertex_map[piece->line[i]];
+    record->cut_vertex_count = piece->line_count;
+    result->phase_one_energy += outcome->phase_one_energy;
+    result->final_energy += outcome->final_energy;
+    result->node_relaxations += outcome->relaxations;
+    result->phase_one_relaxations += outcome->phase_one_relaxations;
+    result->energy_evaluations += outcome->evaluations;
+    result->phase_one_ms += outcome->phase_one_ms;
+    result->phase_two_ms += outcome->phase_two_ms;
+    result->global_iterations += outcome->global_iterations;
+    return status;
+}
+
+/* Seam matching (unless settings->independent), then the seams' mismatch into result (may be NULL). */
+static pz_status match_pieces(const pz_pattern *pattern, const sm_settings *settings, const sm_piece *pieces,
+                              sm_panel *panels, sm_outcome *outcomes, pz_springmass_result *result, pz_ctx *ctx)
+{
+    int32_t np = pattern->panel_count, unmatched = 0;
+    int32_t **maps = malloc((size_t)np * sizeof(int32_t *) + 1);
+    sm_link *links = NULL;
+    int32_t count = maps ? 0 : -1;
+    for (int32_t k = 0; count == 0 && k < np; ++k)
+        maps[k] = pieces[k].vertex_map;
+    if (count == 0)
+        count = build_links(pattern, maps, panels, &links);
+    free(maps);
+    pz_status status = count < 0 ? pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory") : PZ_OK;
+    if (!status && count > 0 && !settings->independent)
+        status = match_seams(panels, np, links, count, outcomes, &unmatched, ctx);
+    if (!status && result) {
+        result->matched_pairs = settings->independent ? 0 : count;
+        result->unmatched_panels = unmatched;
+        result->max_seam_mismatch =
+            count > 0 ? worst_mismatch(panels, links, count, pattern->seam_count + pattern->dart_count) : 0;
     }
-    for (int32_t i = 0; i < line_count; ++i)
-        record->cut_vertices[i] = vertex_map[line[i]];
-    record->cut_vertex_count = line_count;
-    result->phase_one_energy += outcome.phase_one_energy;
-    result->final_energy += outcome.final_energy;
-    result->node_relaxations += outcome.relaxations;
-    result->phase_one_relaxations += outcome.phase_one_relaxations;
-    result->energy_evaluations += outcome.evaluations;
-    result->phase_one_ms += outcome.phase_one_ms;
-    result->global_iterations += outcome.global_iterations;
-    result->phase_two_ms += outcome.phase_two_ms;
-done:
-    free(line);
-    free(map);
-    free(local_uv);
-    free(vertex_map);
-    pz_mesh_free(&mesh);
+    free(links);
     return status;
 }
 
@@ -1314,42 +1961,35 @@ pz_status pz_param_springmass(const pz_pattern *pattern, const pz_springmass_opt
     settings_from(options, &settings);
     if (result)
         memset(result, 0, sizeof *result);
-    const pz_mesh *mesh = pattern->mesh;
-    int32_t np = pattern->panel_count;
-    int32_t *offsets = calloc((size_t)np + 1, sizeof(int32_t));
-    int32_t *order = malloc((size_t)mesh->face_count * sizeof(int32_t) + 1);
-    if (!offsets || !order) {
-        free(offsets);
-        free(order);
-        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
-    }
-    /* faces grouped by panel (counting sort keeps their order) */
-    for (int32_t f = 0; f < mesh->face_count; ++f)
-        ++offsets[pattern->face_panel[f] + 1];
-    for (int32_t p = 0; p < np; ++p)
-        offsets[p + 1] += offsets[p];
-    int32_t *fill = malloc((size_t)np * sizeof(int32_t) + 1);
-    pz_status status = PZ_OK;
-    if (!fill)
+    int32_t np = pattern->panel_count, *offsets = NULL, *order = NULL, retried = 0;
+    pz_status status = pz_param_panel_faces(pattern, &offsets, &order, ctx);
+    sm_piece *pieces = status ? NULL : calloc((size_t)np + 1, sizeof *pieces);
+    sm_panel *panels = status ? NULL : calloc((size_t)np + 1, sizeof *panels);
+    sm_outcome *outcomes = status ? NULL : calloc((size_t)np + 1, sizeof *outcomes);
+    if (!status && (!pieces || !panels || !outcomes))
         status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
     if (!status && result) {
-        result->vertex_count = mesh->vertex_count;
+        result->vertex_count = pattern->mesh->vertex_count;
         result->panel_count = np;
-        result->vertex_energy = calloc((size_t)mesh->vertex_count + 1, sizeof(double));
+        result->vertex_energy = calloc((size_t)pattern->mesh->vertex_count + 1, sizeof(double));
         result->panels = calloc((size_t)np + 1, sizeof(pz_springmass_panel));
         if (!result->vertex_energy || !result->panels)
             status = pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
     }
-    if (!status) {
-        memcpy(fill, offsets, (size_t)np * sizeof(int32_t));
-        for (int32_t f = 0; f < mesh->face_count; ++f)
-            order[fill[pattern->face_panel[f]]++] = f;
-    }
+    for (int32_t k = 0; k < np && !status; ++k)
+        status = start_piece(pattern, order + offsets[k], offsets[k + 1] - offsets[k], k, &settings, &pieces[k],
+                             &panels[k], &outcomes[k], &retried, ctx);
+    if (!status)
+        status = match_pieces(pattern, &settings, pieces, panels, outcomes, result, ctx);
+    for (int32_t k = 0; k < np && !status; ++k)
+        status = panel_finish(&panels[k], &outcomes[k], pieces[k].map, pieces[k].line, &pieces[k].line_count, ctx);
     int do_trial_cut = options && options->trial_cut;
-    for (int32_t p = 0; p < np && !status; ++p)
-        status = flatten_panel(pattern, p, order + offsets[p], offsets[p + 1] - offsets[p], &settings, do_trial_cut,
-                               uv, result, ctx);
-    free(fill);
+    for (int32_t k = 0; k < np && !status; ++k)
+        status = record_piece(&pieces[k], &outcomes[k], k, &settings, do_trial_cut, uv, result, ctx);
+    if (result)
+        result->retried_panels = retried;
+    pieces_free(pieces, panels, np);
+    free(outcomes);
     free(order);
     free(offsets);
     if (status && result)

@@ -10,7 +10,9 @@
 # both relaxations, heap ending within 10% of full relaxation's energy;
 # report.json carries every back-end's own outcome
 # (backend_result); the default grain follows the garment's vertical axis
-# (the y-up shared skirt: its pattern's v runs along 3D y); bad feature
+# (the y-up shared skirt: its pattern's v runs along 3D y); on the shared
+# skirt spring-mass gives both sides of every seam and dart the same length;
+# bad feature
 # files are exit 65 and options given to the wrong back-end exit 64, both
 # with nothing written.
 #
@@ -240,6 +242,16 @@ if [ -n "$DATA" ] && [ -f "$DATA/seams/skirt_0.obj" ]; then
     done
     report_checks "skirt wirewarp" skirt-wirewarp \
         "every panel E_len < 1e-9" "all(p['E_len'] < 1e-9 for p in d['panels'])"
+    # Spring-mass matches the facing segments of every seam and dart (seam matching, docs/springmass.md).
+    run flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o skirt-springmass --backend springmass \
+        --seams "$S/seam0.txt" --seams "$S/seam1.txt" --darts "$S/patch_0_dart_0.txt" --darts "$S/patch_0_dart_1.txt" \
+        --darts "$S/patch_1_dart_0.txt" --darts "$S/patch_1_dart_1.txt" --quiet
+    expect_ok "flatten skirt --backend springmass"
+    report_checks "skirt springmass" skirt-springmass \
+        "two seams, four darts" "len(d['seams']) == 2 and len(d['darts']) == 4" \
+        "seam sides equally long" "all(s['mismatch_rel'] < 1e-9 for s in d['seams'])" \
+        "dart legs equally long" "all(x['mismatch_rel'] < 1e-9 for x in d['darts'])" \
+        "injective" "d['summary']['injective'] is True"
     # The check can fail: with the old default (+z) the warp does not follow y.
     run flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o skirt-z --grain 0,0,1 --backend lscm --quiet
     expect_ok "flatten skirt --grain 0,0,1"

@@ -5,10 +5,15 @@
  *    curve, both schemes), the bodice cut into front and back by
  *    pz_pattern_build, the shared skirt panels;
  *  - on the quarter-sphere with a meridian feature curve, the global
- *    scheme's E_ang is no larger than the progressive one's (Table 1);
+ *    scheme's E_ang is below the progressive one's (Table 1; by 2% at
+ *    least, measured 7%), and the curve's edges keep their 3D lengths
+ *    measured on the pattern (1e-9);
  *  - mirror symmetry: a generated saddle and its mirror image, and a skirt
  *    panel and its mirror image, come out as mirror images (best-fit
- *    reflection residual below 1e-6 of the size); the shared skirt's two
+ *    reflection residual below 1e-6 of the size); one panel symmetric in
+ *    itself (a spherical cap on a mirrored triangulation, Fig. 11) comes out
+ *    symmetric with both schemes, and with a symmetric pair of feature
+ *    curves with the global scheme (the progressive one printed); the shared skirt's two
  *    panels (mirrored positions but 58 faces triangulated differently) within
  *    1% (printed);
  *  - a hemisphere (geodesic boundary): injective, exact boundary lengths;
@@ -128,6 +133,23 @@ static pz_feature_curves *meridian(const pz_pattern *pattern, pz_feature_kind ki
     return meridian_to(pattern, kind, 90);
 }
 
+/* Worst relative 2D-against-3D length error over the edges of the feature curves, measured on the pattern
+ * (not the back-end's own max_wire_error). */
+static double curve_length_error(const pz_pattern *pattern, const double *uv, const pz_feature_curves *curves)
+{
+    double worst = 0;
+    for (int32_t c = 0; c < curves->curve_count; ++c) {
+        const int32_t *v = curves->curves[c].vertices;
+        for (int32_t i = 0; i + 1 < curves->curves[c].vertex_count; ++i) {
+            const double *p = pattern->mesh->positions + 3 * v[i], *q = pattern->mesh->positions + 3 * v[i + 1];
+            double l3 = hypot(hypot(p[0] - q[0], p[1] - q[1]), p[2] - q[2]);
+            double l2 = hypot(uv[2 * v[i]] - uv[2 * v[i + 1]], uv[2 * v[i] + 1] - uv[2 * v[i + 1] + 1]);
+            worst = fmax(worst, fabs(l2 - l3) / l3);
+        }
+    }
+    return worst;
+}
+
 /* ------------------------------------------------------------------ tests */
 
 static void test_quarter_sphere(void)
@@ -150,8 +172,21 @@ static void test_quarter_sphere(void)
     CHECK(global.result.max_wire_error < 1e-9 && prog.result.max_wire_error < 1e-9,
           "meridian: wire error global %g progressive %g", global.result.max_wire_error, prog.result.max_wire_error);
     CHECK(!global.result.best_effort && !prog.result.best_effort, "meridian: best effort");
-    CHECK(global.e_ang <= prog.e_ang * (1 + 1e-9), "meridian: global E_ang %g > progressive %g", global.e_ang,
+    /* Table 1: the global scheme distributes the distortion over both patches, the progressive one
+     * accumulates it in the patch warped last: strictly less angle error (measured 7% less), so a global
+     * scheme that fell back to the progressive one (equal E_ang) fails here. */
+    CHECK(global.e_ang < 0.98 * prog.e_ang, "meridian: global E_ang %g not below progressive %g", global.e_ang,
           prog.e_ang);
+    double *uv_global = NULL, *uv_prog = NULL;
+    warp(pattern, 0, curves, &uv_global);
+    warp(pattern, 1, curves, &uv_prog);
+    double curve_global = curve_length_error(pattern, uv_global, curves),
+           curve_prog = curve_length_error(pattern, uv_prog, curves);
+    printf("meridian measured on the pattern: worst relative edge length error %.2g (global) %.2g (progressive)\n",
+           curve_global, curve_prog);
+    CHECK(curve_global < 1e-9 && curve_prog < 1e-9, "meridian edges: %g / %g", curve_global, curve_prog);
+    free(uv_global);
+    free(uv_prog);
 
     /* A dangling curve (pole to latitude 45): one wire-patch with a slit; the
      * two nodes of each interior curve vertex must still sum to 2 pi. Past
@@ -284,6 +319,8 @@ static void test_key_curve_shape(void)
                    given[g], scheme ? "progressive" : "global", worst, f.result.max_wire_error, f.e_ang,
                    f.result.flipped_triangles, f.result.best_effort);
             CHECK(worst < 1e-9, "given turning %g: 2D turning off by %g rad", given[g], worst);
+            CHECK(curve_length_error(pattern, uv, curves) < 1e-9, "given turning %g: curve edges off by %g", given[g],
+                  curve_length_error(pattern, uv, curves));
             CHECK(f.result.max_wire_error < 1e-9 && !f.result.best_effort, "given turning %g: wire error %g",
                   given[g], f.result.max_wire_error);
             free(uv);
@@ -629,6 +666,82 @@ static void test_mirror_generated(void)
     pz_mesh_free(&half);
 }
 
+/*
+ * One panel symmetric about x = 0 (wang2008 Fig. 11: a symmetric surface
+ * gives a symmetric piece): a spherical cap z = sqrt(R^2 - x^2 - y^2) over a
+ * grid whose squares are split along mirrored diagonals, so that vertex
+ * (i, j) and (2m - i, j) are exact mirror images, triangulation included.
+ * Without feature curves (one wire-patch) both schemes, and with the pair
+ * of curves x = +-a the global scheme, must give a mirror-symmetric piece;
+ * the progressive scheme warps the three patches one after the other, so it
+ * need not (the paper: "the progressive warping is not"): printed.
+ */
+static void test_self_symmetric(void)
+{
+    enum { M = 12, N = 16 };   /* 2M x N squares of 15 mm */
+    const double R = 400, h = 15;
+    int32_t columns = 2 * M + 1, nv = columns * (N + 1), nf = 2 * 2 * M * N;
+    double *positions = malloc((size_t)nv * 3 * sizeof(double));
+    int32_t *faces = malloc((size_t)nf * 3 * sizeof(int32_t)), *a = malloc((size_t)nv * sizeof(int32_t)),
+            *b = malloc((size_t)nv * sizeof(int32_t));
+    REQUIRE(positions && faces && a && b, "out of memory");
+    for (int32_t j = 0; j <= N; ++j)
+        for (int32_t i = 0; i < columns; ++i) {
+            double *p = positions + 3 * (j * columns + i), x = (i - M) * h, y = j * h - N * h / 2;
+            p[0] = x;
+            p[1] = y;
+            p[2] = sqrt(R * R - x * x - y * y);
+            a[j * columns + i] = j * columns + i;
+            b[j * columns + i] = j * columns + (2 * M - i);
+        }
+    int32_t *f = faces;
+    for (int32_t j = 0; j < N; ++j)
+        for (int32_t i = 0; i < 2 * M; ++i) {
+            int32_t v00 = j * columns + i, v10 = v00 + 1, v01 = v00 + columns, v11 = v01 + 1;
+            int32_t split[2][3] = {{v00, v10, v11}, {v00, v11, v01}}, other[2][3] = {{v00, v10, v01}, {v10, v11, v01}};
+            memcpy(f, i < M ? split : other, sizeof split); /* the diagonals mirror each other about x = 0 */
+            f += 6;
+        }
+    pz_mesh *garment = test_mesh_from(nv, positions, nf, faces, &ctx);
+    pz_pattern *pattern = pattern_from(garment, NULL);
+    REQUIRE(pattern->mesh->vertex_count == nv, "the pattern renumbered the vertices");
+    double size = hypot(2 * M * h, N * h);
+    /* the pair of curves x = -4h and x = +4h, across the panel */
+    int32_t *left = malloc((size_t)(N + 1) * sizeof(int32_t)), *right = malloc((size_t)(N + 1) * sizeof(int32_t));
+    REQUIRE(left && right, "out of memory");
+    for (int32_t j = 0; j <= N; ++j) {
+        left[j] = j * columns + M - 4;
+        right[j] = j * columns + M + 4;
+    }
+    pz_feature_curve pair[2] = {{.kind = PZ_FEATURE_ACCESSORY, .vertex_count = N + 1, .vertices = left},
+                                {.kind = PZ_FEATURE_ACCESSORY, .vertex_count = N + 1, .vertices = right}};
+    pz_feature_curves curves = {.curve_count = 2, .curves = pair};
+    for (int run = 0; run < 4; ++run) {
+        int scheme = run & 1, with_curves = run >= 2;
+        double *uv = NULL;
+        warp_figures w = warp(pattern, scheme, with_curves ? &curves : NULL, &uv);
+        double residual = reflection_residual(uv, a, b, nv);
+        printf("symmetric cap, %s, %s: %d wire-patches, reflection residual %.3g mm (size %.0f mm), E_ang %.4g, "
+               "max wire error %.2g\n",
+               scheme ? "progressive" : "global", with_curves ? "curves x = +-60 mm" : "no curves",
+               w.result.wire_patch_count, residual, size, w.e_ang, w.result.max_wire_error);
+        CHECK(w.result.max_wire_error < 1e-9 && !w.result.best_effort && w.result.injective,
+              "symmetric cap: wire error %g, best effort %d", w.result.max_wire_error, w.result.best_effort);
+        if (!scheme || !with_curves)
+            CHECK(residual < 1e-6 * size, "symmetric cap (%s): reflection residual %g mm",
+                  scheme ? "progressive" : "global", residual);
+        free(uv);
+    }
+    free(left);
+    free(right);
+    free(positions);
+    free(faces);
+    free(a);
+    free(b);
+    pz_pattern_free(&pattern);
+    pz_mesh_free(&garment);
+}
+
 static void test_skirt(void)
 {
     const char *shared = test_shared_data();
@@ -724,6 +837,7 @@ int main(void)
     test_developable(PZ_SHAPE_CONE);
     test_bad_input();
     test_mirror_generated();
+    test_self_symmetric();
     test_skirt();
     return test_finish();
 }
