@@ -1117,6 +1117,10 @@ static void add_springmass_result(json_builder *builder, cJSON *object, const pz
     add_number(builder, object, "energy_evaluations", (double)r->energy_evaluations, 0);
     add_number(builder, object, "phase_one_ms", r->phase_one_ms, 3);
     add_number(builder, object, "phase_two_ms", r->phase_two_ms, 3);
+    add_number(builder, object, "matched_pairs", r->matched_pairs, 0);
+    add_number(builder, object, "unmatched_panels", r->unmatched_panels, 0);
+    add_number(builder, object, "retried_panels", r->retried_panels, 0);
+    add_number(builder, object, "max_seam_mismatch", r->max_seam_mismatch, 8);
     cJSON *panels = add_array(builder, object, "panels");
     for (int32_t p = 0; panels && p < r->panel_count; ++p) {
         const pz_springmass_panel *m = &r->panels[p];
