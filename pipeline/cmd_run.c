@@ -113,6 +113,7 @@ typedef struct run_state {
     int32_t verdict_rounds;          /* segmentations redone because of them */
     const pz_mesh *garment;          /* the garment choose_panels segmented (for the verdict's goals) */
     pz_segment_cache *segment_cache; /* evaluations shared by the rounds */
+    pz_field *field;                 /* the cross-field of the original surface, computed once */
     char verdict_reasons[512];       /* the last rejection's panels, for the progress note */
 } run_state;
 
@@ -319,22 +320,25 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
         return restored;
     pz_topology *topology = NULL;
     pz_sketch *sketch = NULL;
-    pz_field *field = NULL;
     pz_status status = pz_topology_build(garment, &topology, ctx);
     if (status == PZ_OK)
         status = gather_sketch(state, garment, &sketch, ctx);
     double start = pz_seconds();
-    if (status == PZ_OK) {
+    /* The field depends on the original surface only: a verdict round reuses it. */
+    if (status == PZ_OK && !state->field) {
         pz_field_options options = {0};
         options.sketch = sketch;
         options.use_poses = 1;
-        status = pz_field_compute(garment, topology, &options, &field, ctx);
+        status = pz_field_compute(garment, topology, &options, &state->field, ctx);
+        state->field_ms = pz_cli_elapsed_ms(start, pz_seconds());
+        if (status == PZ_OK)
+            pz_note(ctx, "run: field: %.0f ms, %d singularities", state->field_ms,
+                    (int)state->field->singularity_count);
     }
     double field_end = pz_seconds();
-    state->field_ms = pz_cli_elapsed_ms(start, field_end);
+    const pz_field *field = state->field;
     if (status == PZ_OK) {
         state->field_singularities = field->singularity_count;
-        pz_note(ctx, "run: field: %.0f ms, %d singularities", state->field_ms, (int)field->singularity_count);
         pz_segment_options options;
         pz_segment_options_default(&options);
         options.max_corners = state->max_corners;
@@ -388,7 +392,6 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
         pz_note(ctx, "run: segment: %.0f ms, %d panels, %d darts%s", state->segment_ms, (int)segment->panel_count,
                 (int)segment->dart_count, segment->goals_met ? "" : " (goals not met)");
     }
-    pz_field_free(&field);
     pz_sketch_free(&sketch);
     pz_topology_free(&topology);
     return status;
@@ -817,6 +820,7 @@ static void run_state_clear(run_state *state)
     free(state->layout_is_dart);
     free(state->vetoed);
     pz_segment_cache_free(&state->segment_cache);
+    pz_field_free(&state->field);
     free(state->original_positions);
     free(state->original_poses);
     memset(state, 0, sizeof *state);
