@@ -405,6 +405,24 @@ static pz_status choose_panels(void *user, pz_mesh *garment, int32_t **face_pane
  * made again, at most MAX_VERDICT_ROUNDS times; then the last pattern stands,
  * marked by judge_goals. Returns 1 to accept the pattern.
  */
+/* The garment's faces bucketed by pattern panel, each bucket increasing: panel p's faces are
+ * (*order)[(*offsets)[p] .. (*offsets)[p + 1] - 1]. 0 when out of memory; the caller frees both. */
+static int faces_by_panel(const pz_pattern *pattern, int32_t **offsets, int32_t **order)
+{
+    int32_t panels = pattern->panel_count, faces = pattern->mesh->face_count;
+    *offsets = calloc((size_t)panels + 2, sizeof(int32_t));
+    *order = malloc(((size_t)faces + 1) * sizeof(int32_t));
+    if (!*offsets || !*order)
+        return 0;
+    for (int32_t f = 0; f < faces; ++f)
+        ++(*offsets)[pattern->face_panel[f] + 2];
+    for (int32_t p = 0; p < panels; ++p)
+        (*offsets)[p + 2] += (*offsets)[p + 1];
+    for (int32_t f = 0; f < faces; ++f)
+        (*order)[(*offsets)[pattern->face_panel[f] + 1]++] = f;
+    return 1;
+}
+
 static pz_status judge_goals(run_state *state, const pz_mesh *garment, const pz_pattern *pattern,
                              const pz_metrics *metrics, pz_segment_panel *panels, pz_ctx *ctx);
 
@@ -413,10 +431,9 @@ static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metric
     run_state *state = user;
     if (!state->segment || !state->garment || state->verdict_rounds >= MAX_VERDICT_ROUNDS)
         return 1;
-    int32_t panels = pattern->panel_count, faces = pattern->mesh->face_count, added = 0;
+    int32_t panels = pattern->panel_count, added = 0, *offsets = NULL, *order = NULL;
     state->verdict_reasons[0] = '\0';
-    int32_t *offsets = calloc((size_t)panels + 2, sizeof(int32_t));
-    int32_t *order = malloc(((size_t)faces + 1) * sizeof(int32_t));
+    int bucketed = faces_by_panel(pattern, &offsets, &order);
     pz_segment_panel *goals = calloc((size_t)panels + 1, sizeof *goals);
     uint64_t *grown = realloc(state->vetoed, ((size_t)state->vetoed_count + panels + 1) * sizeof(uint64_t));
     if (grown)
@@ -426,18 +443,11 @@ static int accept_pattern(void *user, const pz_pattern *pattern, const pz_metric
     quiet_ctx.quiet = 1;
     /* Every goal, judged as the report will judge it: strain and injectivity on the joint flattening,
      * disk and corners on the trued outline. */
-    if (!offsets || !order || !goals || !grown ||
+    if (!bucketed || !goals || !grown ||
         judge_goals(state, state->garment, pattern, metrics, goals, &quiet_ctx) != PZ_OK) {
         free(offsets), free(order), free(goals);
         return 1;
     }
-    /* Faces bucketed by panel, each bucket increasing (the key's order). */
-    for (int32_t f = 0; f < faces; ++f)
-        ++offsets[pattern->face_panel[f] + 2];
-    for (int32_t p = 0; p < panels; ++p)
-        offsets[p + 2] += offsets[p + 1];
-    for (int32_t f = 0; f < faces; ++f)
-        order[offsets[pattern->face_panel[f] + 1]++] = f;
     pz_goal_options options = {state->max_corners, state->max_strain, {0, 0, 1}, 0};
     for (int32_t p = 0; p < panels; ++p) {
         if (!goals[p].goals.failures)
@@ -589,15 +599,13 @@ static pz_status judge_goals(run_state *state, const pz_mesh *garment, const pz_
     state->goals_met = 1;
     state->reasons[0] = '\0';
     pz_topology *topology = NULL;
-    int32_t *face_ids = NULL, *face_offsets = NULL, *cursor = NULL;
+    int32_t *face_ids = NULL, *face_offsets = NULL;
     uint8_t *edge_cut = NULL;
     pz_status status = pz_topology_build(garment, &topology, ctx);
     if (status == PZ_OK) {
-        face_ids = malloc(((size_t)garment->face_count + 1) * sizeof(int32_t));
-        face_offsets = calloc((size_t)panel_count + 1, sizeof(int32_t));
-        cursor = malloc(((size_t)panel_count + 1) * sizeof(int32_t));
+        int bucketed = faces_by_panel(pattern, &face_offsets, &face_ids);
         edge_cut = calloc((size_t)topology->edge_count + 1, 1);
-        if (!face_ids || !face_offsets || !cursor || !edge_cut)
+        if (!bucketed || !edge_cut)
             status = pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory judging the goals");
     }
     if (status == PZ_OK) {
@@ -607,13 +615,6 @@ static pz_status judge_goals(run_state *state, const pz_mesh *garment, const pz_
             if (t >= 0)
                 edge_cut[e] = cut_faces[h] != cut_faces[pz_he_next(t)] || cut_faces[pz_he_next(h)] != cut_faces[t];
         }
-        for (int32_t f = 0; f < garment->face_count; ++f)
-            ++face_offsets[pattern->face_panel[f] + 1];
-        for (int32_t p = 0; p < panel_count; ++p)
-            face_offsets[p + 1] += face_offsets[p];
-        memcpy(cursor, face_offsets, (size_t)panel_count * sizeof(int32_t));
-        for (int32_t f = 0; f < garment->face_count; ++f)
-            face_ids[cursor[pattern->face_panel[f]]++] = f;
     }
     pz_goal_options goal_options = {state->max_corners, state->max_strain, {0, 0, 1}, 0};
     size_t used = 0;
@@ -649,7 +650,6 @@ static pz_status judge_goals(run_state *state, const pz_mesh *garment, const pz_
         }
     }
     free(edge_cut);
-    free(cursor);
     free(face_offsets);
     free(face_ids);
     pz_topology_free(&topology);

@@ -22,7 +22,8 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 # fontconfig (cairo, pattern.pdf) keeps its caches until exit: not a leak of ours (sanitizer builds).
 export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan-fontconfig.supp:print_suppressions=0${LSAN_OPTIONS:+:$LSAN_OPTIONS}"
-source "$(dirname "$0")/../cli/lib.sh"
+here=$(cd "$(dirname "$0")" && pwd)
+source "$here/../cli/lib.sh"
 
 run generate skirt -o skirt.obj --faces 2000 --quiet
 expect_ok "generate skirt"
@@ -47,9 +48,10 @@ check "strict: no TABLES" bash -c '! grep -qx "TABLES" strict/pattern.dxf'
 check "strict: 7-bit ASCII" bash -c '! LC_ALL=C grep -q "[^[:print:][:space:]]" strict/pattern.dxf'
 
 if /usr/bin/python3 -c 'import ezdxf' 2>/dev/null; then
-    check "ezdxf: allowances 15/25 mm, audit clean" /usr/bin/python3 - strict/pattern.dxf <<'PY'
+    check "ezdxf: allowances 15/25 mm, audit clean" env PYTHONPATH="$here" /usr/bin/python3 - strict/pattern.dxf <<'PY'
 import math, sys
 import ezdxf
+from sew_distance import distance_to_loop  # tests/export, on PYTHONPATH
 doc = ezdxf.readfile(sys.argv[1])
 assert not doc.audit().has_errors
 blocks = [b for b in doc.blocks if not b.name.startswith('*')]
@@ -60,15 +62,7 @@ for block in blocks:
     assert len(cut) == 1 and len(sew) == 1, block.name
     cut = [(v.dxf.location.x, v.dxf.location.y) for v in cut[0].vertices]
     sew = [(v.dxf.location.x, v.dxf.location.y) for v in sew[0].vertices]
-    def distance(p):
-        best = math.inf
-        for i in range(len(sew)):
-            a, b = sew[i], sew[(i + 1) % len(sew)]
-            dx, dy = b[0] - a[0], b[1] - a[1]
-            t = max(0, min(1, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy or 1)))
-            best = min(best, math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy))
-        return best
-    d = [distance(p) for p in cut]
+    d = [distance_to_loop(p, sew) for p in cut]
     # every cut vertex: at least the seam allowance, at most the mitre limit of the hem allowance
     assert min(d) > 15 - 0.1 and max(d) < 2 * 25 + 0.1, (block.name, min(d), max(d))
     # both allowances occur
@@ -93,23 +87,16 @@ printf '# panel panel mm\n0 0 22\n' >good.txt
 run flatten skirt.obj -o seam22 --quiet --fabric-width 4000 --allowances good.txt
 expect_ok "flatten --allowances good.txt"
 if /usr/bin/python3 -c 'import ezdxf' 2>/dev/null; then
-    check "ezdxf: the seam at 22 mm, the hem at 10" /usr/bin/python3 - seam22/pattern.dxf <<'PY'
+    check "ezdxf: the seam at 22 mm, the hem at 10" env PYTHONPATH="$here" /usr/bin/python3 - seam22/pattern.dxf <<'PY'
 import math, sys
 import ezdxf
+from sew_distance import distance_to_loop  # tests/export, on PYTHONPATH
 doc = ezdxf.readfile(sys.argv[1])
 block = [b for b in doc.blocks if not b.name.startswith('*')][0]
 cut = [e for e in block if e.dxftype() == 'POLYLINE' and e.dxf.layer == '1'][0]
 sew = [e for e in block if e.dxftype() == 'POLYLINE' and e.dxf.layer == '14'][0]
 sew = [(v.dxf.location.x, v.dxf.location.y) for v in sew.vertices]
-def distance(p):
-    best = math.inf
-    for i in range(len(sew)):
-        a, b = sew[i], sew[(i + 1) % len(sew)]
-        dx, dy = b[0] - a[0], b[1] - a[1]
-        t = max(0, min(1, ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy or 1)))
-        best = min(best, math.hypot(p[0] - a[0] - t * dx, p[1] - a[1] - t * dy))
-    return best
-d = [distance((v.dxf.location.x, v.dxf.location.y)) for v in cut.vertices]
+d = [distance_to_loop((v.dxf.location.x, v.dxf.location.y), sew) for v in cut.vertices]
 assert min(d) > 10 - 0.1 and any(abs(x - 22) < 0.1 for x in d) and any(abs(x - 10) < 0.1 for x in d), sorted(d)
 PY
 fi

@@ -13,22 +13,7 @@
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
 
-source_dir=${PZ_SOURCE_DIR:-$(cd "$(dirname "$0")/../.." && pwd)}
-build_dir=${PZ_BUILD_DIR:-}
-validator="$source_dir/.tools/node_modules/gltf-validator"
-
-missing_tool() {
-    if [ "${CI:-}" = "true" ]; then
-        echo "FAIL: $1 (required when CI=true)"
-        exit 1
-    fi
-    echo "SKIPPED: $1"
-    exit 77
-}
-
-command -v node >/dev/null 2>&1 || missing_tool "node is not installed"
-[ -d "$validator" ] ||
-    missing_tool "gltf-validator not in $source_dir/.tools (npm install --prefix $source_dir/.tools gltf-validator)"
+source "$(dirname "$0")/../gltf_validator_setup.sh"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/pz_gltf_validator.XXXXXX") || exit 1
 trap 'rm -rf "$work"' EXIT
