@@ -567,8 +567,10 @@ pz_status pz_prepare(const pz_mesh *mesh, const pz_prepare_options *options, pz_
  * calls. Weld, repair and fragments always run; then a mesh over 10000 faces
  * (options->target_faces when set) is remeshed to that count, one with under
  * 95% of its faces free of angles under 20 degrees is remeshed at its own
- * face count, and that remesh is undone (the repaired input kept) when it
- * moves the shape beyond the Hausdorff bound. The remesh step's detail says
+ * face count. A remesh that moves the shape beyond the Hausdorff bound is
+ * tried again at twice the faces (up to 40000, below the input's count), then
+ * once at the input's count for a badly shaped input; when none fits the
+ * bound it is undone (the repaired input kept). The remesh step's detail says
  * why it ran, or why not (docs/prepare.md). Ownership as pz_prepare.
  */
 pz_status pz_prepare_auto(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out,

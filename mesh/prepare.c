@@ -47,9 +47,10 @@
  *     bounding-box diagonal; exceeding it is reported, not fatal.
  *
  * Automatic mode (pz_prepare_auto, `run --prepare auto`) runs 4-7 only for
- * a mesh over 10000 faces (remeshed to 10000) or one with under 95% of its
- * faces well shaped (remeshed at its own density, undone when that leaves
- * the Hausdorff bound); see auto_decide and docs/prepare.md.
+ * a mesh over 10000 faces (remeshed to 10000; beyond the Hausdorff bound,
+ * again at twice the faces up to 40000, then undone) or one with under 95%
+ * of its faces well shaped (remeshed at its own density, undone when that
+ * leaves the bound); see auto_decide, retry_denser and docs/prepare.md.
  *
  * Memory: a few arrays of 3F ints and the CGAL structures (~250 B/face for a
  * Surface_mesh, ~150 B/face for an AABB tree); for a 1M-face input the peak
@@ -92,6 +93,8 @@
  * mostly, and saves the corrected pass (half of the remeshing time).
  */
 #define REMESH_EDGE_SHRINK 1.19
+/* An outline vertex farther than this fraction of the Hausdorff bound from its chord at the remeshing scale is kept. */
+#define OUTLINE_TOLERANCE 0.25
 
 /* Undirected edges as vertex pairs: the welded seams of the working mesh. */
 typedef struct edge_list {
@@ -408,9 +411,11 @@ static pz_status weld(pz_mesh *mesh, double distance, edge_list *seams, int32_t 
  * temporary last pose holds each vertex's old index in x (poses are compacted
  * with the vertices), which then renumbers the seams. *validity gets
  * pz_mesh_prepare's own status (PZ_ERR_INVALID_MESH when problems remain).
+ * renumbered (NULL: not wanted) gets the old -> new vertex table (-1:
+ * dropped; malloc'd, the caller frees it).
  */
 static pz_status prepare_tracked(pz_mesh *mesh, const char *name, unsigned flags, edge_list *seams,
-                                 pz_status *validity, pz_ctx *ctx)
+                                 pz_status *validity, int32_t **renumbered, pz_ctx *ctx)
 {
     int32_t old_count = mesh->vertex_count;
     double *ids = malloc(3 * (size_t)old_count * sizeof(double) + 1);
@@ -452,7 +457,10 @@ static pz_status prepare_tracked(pz_mesh *mesh, const char *name, unsigned flags
         }
     }
     seams->count = kept;
-    free(new_index);
+    if (renumbered)
+        *renumbered = new_index;
+    else
+        free(new_index);
     return PZ_OK;
 }
 
@@ -620,13 +628,15 @@ static pz_status orient(pz_mesh *mesh, const char *name, edge_list *seams, pz_pr
         return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory orienting faces");
     for (int32_t f = 0; f < mesh->face_count; ++f)
         old_second[f] = mesh->faces[3 * f + 1];
-    int32_t faces = mesh->face_count, vertices = mesh->vertex_count;
-    pz_status status = prepare_tracked(mesh, name, PZ_REPAIR_ORIENT, seams, validity, ctx);
+    int32_t faces = mesh->face_count, *new_index = NULL;
+    /* it also drops the vertices earlier passes stranded (a fin's tip), renumbering the rest */
+    pz_status status = prepare_tracked(mesh, name, PZ_REPAIR_ORIENT, seams, validity, &new_index, ctx);
     report->flipped_faces = 0;
-    if (!status && mesh->face_count == faces && mesh->vertex_count == vertices)
+    if (!status && mesh->face_count == faces)
         for (int32_t f = 0; f < faces; ++f)
-            report->flipped_faces += mesh->faces[3 * f + 1] != old_second[f];
+            report->flipped_faces += mesh->faces[3 * f + 1] != new_index[old_second[f]];
     free(old_second);
+    free(new_index);
     return status;
 }
 
@@ -654,7 +664,7 @@ static pz_status repair(pz_mesh *mesh, const char *name, edge_list *seams, pz_pr
     int32_t faces_before = mesh->face_count, degenerate = found.degenerate_faces;
     unsigned flags = dropping ? PZ_REPAIR_DROP_DEGENERATE | PZ_REPAIR_DROP_DUPLICATES : 0;
     if (dropping || found.unreferenced_vertices || report->nonfinite_faces)
-        status = prepare_tracked(mesh, name, flags, seams, &validity, ctx); /* also drops unused vertices */
+        status = prepare_tracked(mesh, name, flags, seams, &validity, NULL, ctx); /* also drops unused vertices */
     pz_validation_clear(&found);
     int32_t dropped = faces_before - mesh->face_count;
     report->degenerate_faces = degenerate < dropped ? degenerate : dropped;
@@ -717,7 +727,7 @@ static pz_status drop_fragments(pz_mesh *mesh, const char *name, double fraction
     if (report->dropped_components) {
         report->dropped_component_faces = pz_mesh_drop_faces(mesh, drop);
         pz_status validity = PZ_OK;
-        status = prepare_tracked(mesh, name, 0, seams, &validity, ctx); /* drops the stranded vertices */
+        status = prepare_tracked(mesh, name, 0, seams, &validity, NULL, ctx); /* drops the stranded vertices */
     }
 done:
     free(component);
@@ -1083,13 +1093,16 @@ static int32_t line_next(const int32_t *neighbour, int32_t previous, int32_t at)
 }
 
 /*
- * Cosine of the turn of a line at v (degree 2), measured between the points
- * `reach` away along the line on either side (or its ends): a jagged line
- * (a seam following mesh edges, a noisy outline) turns at every vertex, but
- * not at the scale of the remeshing.
+ * The shape of a line at v (degree 2) at the scale of the remeshing: the
+ * cosine of its turn between the points `reach` away along the line on
+ * either side (or its ends), and v's distance from the chord between those
+ * two points. A jagged line (a seam following mesh edges, a noisy outline)
+ * turns at every vertex, but not at the scale of the remeshing; the chord
+ * distance is what removing v (and its neighbours within reach) would move
+ * the line by.
  */
-static double line_bend(const pz_cgal_surface *s, const int32_t *degree, const int32_t *neighbour, int32_t v,
-                        double reach)
+static void line_shape(const pz_cgal_surface *s, const int32_t *degree, const int32_t *neighbour, int32_t v,
+                       double reach, double *cosine, double *deviation)
 {
     const double *p = s->positions + 3 * (size_t)v;
     const double *ends[2];
@@ -1104,21 +1117,29 @@ static double line_bend(const pz_cgal_surface *s, const int32_t *degree, const i
         }
         ends[side] = s->positions + 3 * (size_t)at;
     }
-    double in[3], out[3], dot = 0.0, in_length = 0.0, out_length = 0.0;
+    double in[3], out[3], chord[3], dot = 0.0, in_length = 0.0, out_length = 0.0, chord_length = 0.0, along = 0.0;
     for (int k = 0; k < 3; ++k) {
         in[k] = p[k] - ends[0][k];
         out[k] = ends[1][k] - p[k];
+        chord[k] = ends[1][k] - ends[0][k];
         dot += in[k] * out[k];
         in_length += in[k] * in[k];
         out_length += out[k] * out[k];
+        chord_length += chord[k] * chord[k];
+        along += in[k] * chord[k];
     }
     double lengths = sqrt(in_length * out_length);
-    return lengths > 0.0 ? dot / lengths : 1.0;
+    *cosine = lengths > 0.0 ? dot / lengths : 1.0;
+    double t = chord_length > 0.0 ? fmin(1.0, fmax(0.0, along / chord_length)) : 0.0;
+    *deviation = 0.0;
+    for (int k = 0; k < 3; ++k)
+        *deviation += (in[k] - t * chord[k]) * (in[k] - t * chord[k]);
+    *deviation = sqrt(*deviation);
 }
 
-/* Whether v bends the most among the line vertices closer than `reach` (the lower index on a tie). */
+/* Whether v ranks first (lowest `rank`) among the line vertices closer than `reach` (the lower index on a tie). */
 static int sharpest_around(const pz_cgal_surface *s, const int32_t *degree, const int32_t *neighbour,
-                           const double *bend, int32_t v, double reach)
+                           const double *rank, int32_t v, double reach)
 {
     const double *p = s->positions + 3 * (size_t)v;
     for (int side = 0; side < 2; ++side) {
@@ -1126,7 +1147,7 @@ static int sharpest_around(const pz_cgal_surface *s, const int32_t *degree, cons
         for (int32_t steps = 0; steps < s->vertex_count && at != v && degree[at] == 2 &&
                                 squared_distance3(p, s->positions + 3 * (size_t)at) < reach * reach;
              ++steps) {
-            if (bend[at] < bend[v] || (bend[at] == bend[v] && at < v))
+            if (rank[at] < rank[v] || (rank[at] == rank[v] && at < v))
                 return 0;
             int32_t next = line_next(neighbour, previous, at);
             previous = at;
@@ -1136,40 +1157,104 @@ static int sharpest_around(const pz_cgal_surface *s, const int32_t *degree, cons
     return 1;
 }
 
+/* Joins the two ends of a crease edge in the union-find `crease` (-1: not on a crease). */
+static void join_crease(int32_t *crease, int32_t a, int32_t b)
+{
+    if (crease[a] < 0)
+        crease[a] = a;
+    if (crease[b] < 0)
+        crease[b] = b;
+    pz_union_find_join(crease, a, b);
+}
+
+/*
+ * Marks (degree -1) the vertices of every connected set of crease edges,
+ * except a set that touches the outline or a seam (on_line) and spans less
+ * than `edge` (its bounding-box diagonal). Thinning keeps every line vertex,
+ * so a strip of the input's fine faces stays beside the lines, and on a
+ * scan such a fold is noise: with +-0.4 mm noise, 1.2 mm edges fold by over
+ * CREASE_DEGREES here and there, and locking them kept that strip (a
+ * 1M-face unwelded bodice to 20000 faces: 95.8% well shaped, 676 of the 833
+ * bad faces on the seam; 99.7% without them). Small folds away from the
+ * lines are kept: ignoring them too smoothed the shared face scan's
+ * features away (10000 faces: 2.66 mm from the input instead of 1.48).
+ */
+static void lock_long_creases(const pz_cgal_surface *surface, int32_t *crease, const uint8_t *on_line, double edge,
+                              int32_t *degree)
+{
+    int32_t n = surface->vertex_count;
+    double *box = malloc(6 * (size_t)n * sizeof(double) + 1); /* per root: lo xyz, hi xyz */
+    uint8_t *touches = calloc((size_t)n + 1, 1);              /* per root: a vertex of the set is on a line */
+    for (int32_t v = 0; v < n; ++v)
+        if (crease[v] >= 0)
+            crease[v] = pz_union_find_root(crease, v);
+    for (int32_t v = 0; touches && v < n; ++v)
+        if (crease[v] >= 0 && on_line[v])
+            touches[crease[v]] = 1;
+    for (int32_t v = 0; box && v < n; ++v)
+        if (crease[v] == v)
+            for (int k = 0; k < 3; ++k)
+                box[6 * (size_t)v + k] = box[6 * (size_t)v + 3 + k] = surface->positions[3 * (size_t)v + k];
+    for (int32_t v = 0; box && v < n; ++v)
+        for (int k = 0; k < 3 && crease[v] >= 0; ++k) {
+            double *root = box + 6 * (size_t)crease[v], x = surface->positions[3 * (size_t)v + k];
+            root[k] = fmin(root[k], x);
+            root[3 + k] = fmax(root[3 + k], x);
+        }
+    for (int32_t v = 0; v < n; ++v) {
+        if (crease[v] < 0)
+            continue;
+        const double *root = box ? box + 6 * (size_t)crease[v] : NULL;
+        /* out of memory for the boxes: every crease is kept, the safe side */
+        if (!root || !touches || !touches[crease[v]] || squared_distance3(root, root + 3) >= edge * edge)
+            degree[v] = -1;
+    }
+    free(box);
+    free(touches);
+}
+
 /*
  * Vertices remeshing must keep. Corners of the lines it keeps (outline and
  * seams): ends, junctions (a seam meeting the outline or another seam), and
  * turns sharper than CORNER_DEGREES; collapsing one would cut the corner
- * off the garment. On seams the turn is measured at the scale of half the
- * remeshing edge, one vertex per turn (the sharpest): locking every vertex
- * of a jagged seam would keep its tiny edges and slivers beside them. On
- * the outline, every vertex turning that much stays locked: with fewer
- * locks, remeshing moved a vertex of a noisy hem 10 mm off it (a 60K-face
- * bodice with noise, to 2000 faces: 6.6 mm from the input, 3.8 mm with
- * every turn locked; cause inside CGAL not found). And the vertices of
- * creases (faces folding by more than CREASE_DEGREES: a collar fold, a
- * pressed pleat): tangential relaxation would round them off, by up to half
- * an edge.
+ * off the garment. Turns are measured at the scale of half the remeshing
+ * edge, and only one vertex per reach is locked (the sharpest): a line that
+ * is jagged at the input's scale (a seam following mesh edges, a scanned
+ * hem with noise) turns at every vertex, and locking all of them keeps its
+ * tiny edges and slivers beside them (a 1M-face bodice with +-0.4 mm noise,
+ * every outline turn locked: 97.0% of the faces well shaped, every bad one
+ * on the outline). On the outline a vertex is also kept when it lies more
+ * than `tolerance` from the chord between the points half an edge away (a
+ * tight curve of the hem, which a turn at that scale can miss: remeshing
+ * cut 7 mm off the side of a noisy bodice's hem, bound 3.7 mm), and the one
+ * kept within a reach is the farthest from its chord, so the outline
+ * remeshing leaves stays near the input's. And the vertices of creases
+ * (faces folding by more than CREASE_DEGREES: a collar fold, a pressed
+ * pleat) whose connected crease edges span at least an edge L
+ * (lock_long_creases): tangential relaxation would round them off, by up to
+ * half an edge.
  */
 #define CORNER_DEGREES 30.0
 #define CREASE_DEGREES 60.0
-static pz_status find_corners(pz_cgal_surface *surface, double edge, pz_ctx *ctx)
+static pz_status find_corners(pz_cgal_surface *surface, double edge, double tolerance, pz_ctx *ctx)
 {
     int32_t n = surface->vertex_count;
     int32_t *degree = calloc((size_t)n + 1, sizeof(int32_t));
     int32_t *neighbour = malloc(2 * (size_t)n * sizeof(int32_t) + 1);
-    double *bend = malloc((size_t)n * sizeof(double) + 1);
-    uint8_t *on_outline = calloc((size_t)n + 1, 1);
+    double *rank = malloc((size_t)n * sizeof(double) + 1);
+    uint8_t *on_outline = calloc((size_t)n + 1, 1), *on_line = malloc((size_t)n + 1),
+            *candidate = calloc((size_t)n + 1, 1);
+    int32_t *crease = malloc((size_t)n * sizeof(int32_t) + 1);
     halfedge_key *keys = sorted_halfedges(surface->faces, surface->face_count);
     surface->locked = malloc((size_t)n * sizeof(int32_t) + 1);
     surface->locked_count = 0;
-    if (!degree || !neighbour || !bend || !on_outline || !keys || !surface->locked) {
-        free(degree);
-        free(neighbour);
-        free(bend);
-        free(on_outline);
-        free(keys);
-        return pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory finding corners");
+    pz_status status = PZ_OK;
+    if (crease)
+        memset(crease, 0xff, (size_t)n * sizeof(int32_t));
+    if (!degree || !neighbour || !rank || !on_outline || !on_line || !candidate || !crease || !keys ||
+        !surface->locked) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "prepare: out of memory finding corners");
+        goto done;
     }
     size_t count = 3 * (size_t)surface->face_count;
     double crease_cos = cos(CREASE_DEGREES * 3.14159265358979323846 / 180.0);
@@ -1180,27 +1265,41 @@ static pz_status find_corners(pz_cgal_surface *surface, double edge, pz_ctx *ctx
             on_outline[keys[begin].lo] = on_outline[keys[begin].hi] = 1;
         }
         else if (end == begin + 2 && normal_cos(surface, keys[begin].halfedge, keys[begin + 1].halfedge) < crease_cos)
-            degree[keys[begin].lo] = degree[keys[begin].hi] = -1; /* on a crease: locked below */
+            join_crease(crease, keys[begin].lo, keys[begin].hi);
     }
-    free(keys);
+    memcpy(on_line, on_outline, (size_t)n);
+    for (int32_t e = 0; e < 2 * surface->edge_count; ++e)
+        on_line[surface->edges[e]] = 1;
+    lock_long_creases(surface, crease, on_line, edge, degree);
     for (int32_t e = 0; e < surface->edge_count; ++e)
         add_line_edge(degree, neighbour, surface->edges[2 * e], surface->edges[2 * e + 1]);
     double cos_limit = cos(CORNER_DEGREES * 3.14159265358979323846 / 180.0), reach = 0.5 * edge;
-    for (int32_t v = 0; v < n; ++v)
-        bend[v] = degree[v] == 2 ? line_bend(surface, degree, neighbour, v, on_outline[v] ? 0.0 : reach) : 1.0;
+    for (int32_t v = 0; v < n; ++v) {
+        rank[v] = 1.0;
+        if (degree[v] != 2)
+            continue;
+        double cosine = 1.0, deviation = 0.0;
+        line_shape(surface, degree, neighbour, v, reach, &cosine, &deviation);
+        candidate[v] = cosine < cos_limit || (on_outline[v] && deviation > tolerance);
+        rank[v] = on_outline[v] ? -deviation : cosine; /* lines are all outline or all seam */
+    }
     for (int32_t v = 0; v < n; ++v) {
         int corner = degree[v] != 0 && degree[v] != 2; /* ends, junctions and creases (-1) */
         if (degree[v] == 2)
-            corner = bend[v] < cos_limit &&
-                     sharpest_around(surface, degree, neighbour, bend, v, on_outline[v] ? 0.0 : reach);
+            corner = candidate[v] && sharpest_around(surface, degree, neighbour, rank, v, reach);
         if (corner)
             surface->locked[surface->locked_count++] = v;
     }
+done:
     free(degree);
     free(neighbour);
-    free(bend);
+    free(rank);
     free(on_outline);
-    return PZ_OK;
+    free(on_line);
+    free(candidate);
+    free(crease);
+    free(keys);
+    return status;
 }
 
 /* Face fraction whose smallest angle exceeds 20 degrees. */
@@ -1640,7 +1739,7 @@ static pz_status decimate_and_remesh(const pz_mesh *work, const edge_list *seams
                   (int)work->face_count, DECIMATE_ABOVE * expected);
     }
     started = pz_seconds();
-    status = find_corners(&source, edge, ctx);
+    status = find_corners(&source, edge, OUTLINE_TOLERANCE * report->hausdorff_bound, ctx);
     if (!status)
         status = pz_cgal_remesh(&source, edge, plan->iterations, remeshed, ctx);
     int passes = 1;
@@ -1775,13 +1874,10 @@ static pz_status keep_repaired(pz_mesh **work, const edge_list *seams, const pre
     return chain_seams(result, seams->pairs, seams->count, ctx);
 }
 
-/* A remesh for shape that moved the shape too much is undone: the report says what was tried. */
-static void undo_remesh(pz_prepare_result *result, char *why, size_t size)
+/* Drops the remeshed result (auto mode: a remesh that is undone or tried again). */
+static void discard_remesh(pz_prepare_result *result)
 {
     pz_prepare_report *report = &result->report;
-    snprintf(why, size, "auto: undone: remeshed for shape (%d faces), it moved %.2f mm from the input (bound "
-             "%.2f mm): the input's triangles are kept", (int)result->mesh->face_count, report->hausdorff,
-             report->hausdorff_bound);
     pz_mesh_free(&result->mesh);
     free(result->seam_offsets);
     free(result->seam_vertices);
@@ -1791,6 +1887,63 @@ static void undo_remesh(pz_prepare_result *result, char *why, size_t size)
     report->target_edge = 0.0;
     report->hausdorff = report->pose_hausdorff_max = 0.0;
     report->within_bound = 1;
+}
+
+/* A remesh for shape that moved the shape too much is undone: the report says what was tried. */
+static void undo_remesh(pz_prepare_result *result, char *why, size_t size)
+{
+    pz_prepare_report *report = &result->report;
+    snprintf(why, size, "auto: undone: remeshed for shape (%d faces), it moved %.2f mm from the input (bound "
+             "%.2f mm): the input's triangles are kept", (int)result->mesh->face_count, report->hausdorff,
+             report->hausdorff_bound);
+    discard_remesh(result);
+}
+
+/*
+ * Auto mode, a fine mesh remeshed to fewer faces beyond the Hausdorff bound
+ * (a scan with detail finer than the count can hold: the shared face scan,
+ * 34K faces, was 1.48 mm from its input at 10000 faces, bound 1.04 mm): the
+ * face count is doubled, up to AUTO_RETRY_MAX_FACES and below the input's
+ * own count, until the result is within the bound. A badly shaped input
+ * (under AUTO_WELL_SHAPED) is then remeshed at its own count, as in the
+ * shape case. When no remesh is within the bound, the input is kept as it
+ * is (*undone set; the remesh detail lists the counts tried).
+ */
+#define AUTO_RETRY_MAX_FACES 40000
+
+static pz_status retry_denser(const pz_mesh *work, const edge_list *seams, const char *name, prepare_plan *plan,
+                              double work_shaped, char *why, size_t size, int *undone, pz_prepare_result *result,
+                              step_state *state, pz_ctx *ctx)
+{
+    pz_prepare_report *report = &result->report;
+    char tried[120] = "";
+    size_t used = 0;
+    pz_status status = PZ_OK;
+    int own_count_tried = 0;
+    while (!status && !report->within_bound) {
+        used += (size_t)snprintf(tried + used, sizeof tried - used, "%s%d faces %.2f mm", used ? ", " : "",
+                                 (int)result->mesh->face_count, report->hausdorff);
+        used = used < sizeof tried ? used : sizeof tried - 1;
+        int32_t next = 2 * plan->target_faces;
+        if (next > AUTO_RETRY_MAX_FACES || next >= work->face_count) {
+            if (own_count_tried || work_shaped >= AUTO_WELL_SHAPED)
+                break;
+            next = work->face_count; /* badly shaped: its own density is the last try */
+            own_count_tried = 1;
+        }
+        discard_remesh(result);
+        plan->target_faces = next;
+        snprintf(why, size, "auto: %d faces; beyond the bound %.2f mm at %s: retried at %d faces",
+                 (int)work->face_count, report->hausdorff_bound, tried, (int)next);
+        status = remesh_all(work, seams, name, plan, why, result, state, ctx);
+    }
+    if (status || report->within_bound)
+        return status;
+    snprintf(why, size, "auto: undone: beyond the bound %.2f mm at %s: the input's %d faces (%.1f%% well shaped) "
+             "are kept", report->hausdorff_bound, tried, (int)work->face_count, 100.0 * work_shaped);
+    discard_remesh(result);
+    *undone = 1;
+    return PZ_OK;
 }
 
 static pz_status run_prepare(const pz_mesh *mesh, const pz_prepare_options *options, const char *name,
@@ -1814,22 +1967,29 @@ static pz_status run_prepare(const pz_mesh *mesh, const pz_prepare_options *opti
         report->hausdorff_bound = HAUSDORFF_FRACTION * report->bbox_diagonal;
         report->within_bound = 1;
     }
-    char why[200] = "";
+    char why[256] = "";
     auto_need need = NEED_DENSITY;
-    int undone = 0;
+    int undone = 0, automatic = 0;
+    double work_shaped = 1.0;
     if (!status && options->no_remesh) {
         need = NEED_NOTHING;
         snprintf(why, sizeof why, "off");
     } else if (!status && options->automatic && plan.target_edge <= 0.0) {
-        need = auto_decide(work, options, well_shaped_fraction(work), &plan, why, sizeof why);
+        automatic = 1;
+        work_shaped = well_shaped_fraction(work);
+        need = auto_decide(work, options, work_shaped, &plan, why, sizeof why);
     }
     if (!status && need != NEED_NOTHING) {
         status = remesh_all(work, &seams, name, &plan, why, result, &state, ctx);
+        if (!status && automatic && need == NEED_DENSITY && !report->within_bound)
+            status = retry_denser(work, &seams, name, &plan, work_shaped, why, sizeof why, &undone, result, &state,
+                                  ctx);
         if (!status && need == NEED_SHAPE && !report->within_bound) {
             undo_remesh(result, why, sizeof why);
-            need = NEED_NOTHING;
             undone = 1;
         }
+        if (undone)
+            need = NEED_NOTHING;
     }
     if (!status && need == NEED_NOTHING)
         status = keep_repaired(&work, &seams, &plan, why, undone, result, &state, ctx);

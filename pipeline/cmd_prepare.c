@@ -7,9 +7,11 @@
  * succeeded, so that a failed run prints exactly its one error line. Outputs:
  * OUT (rest pose; with poses and an .obj/.ply OUT, pose p goes to
  * OUT-stem.poseP.EXT as `generate` does, a .glb keeps them as morph targets)
- * and seams.json beside OUT: the welded seams as a sketch file for
- * `panelize field --sketch`. All written atomically; a failure removes what
- * was already written.
+ * and, only when welding found seams, OUT-stem.seams.json beside OUT: the
+ * welded seams as a sketch file for `panelize field --sketch` (named after
+ * OUT so that it never replaces a user's own seams.json; refused when it
+ * would replace an input). All written atomically (temporary file, then
+ * rename); a failure removes what was already written.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -17,6 +19,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <sys/stat.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -32,8 +35,8 @@ const char pz_cli_prepare_usage[] =
     "inputs and remeshes isotropically (outline and seams kept), carries extra\n"
     "poses over, and reports the Hausdorff distance to the repaired input\n"
     "against 0.5% of the bounding-box diagonal. Writes OUT (.obj, .ply or .glb,\n"
-    "in mm) and seams.json beside it ({\"curves\": [[[x,y,z], ...], ...]}, for\n"
-    "`panelize field --sketch`).\n"
+    "in mm) and, when welding found seams, OUT-stem.seams.json beside it\n"
+    "({\"curves\": [[[x,y,z], ...], ...]}, for `panelize field --sketch`).\n"
     "\n"
     "options:\n"
     "  -o, --output OUT   output mesh; with poses and .obj/.ply, pose P goes to\n"
@@ -99,7 +102,7 @@ static pz_status parse_options(const pz_cli_args *args, pz_prepare_options *opti
 
 /* ---------------------------------------------------------------- output */
 
-/* "dir/out.obj" -> "dir/out.pose2.obj"; "dir/out.obj" -> "dir/seams.json" (caller frees). */
+/* "dir/out.obj" -> "dir/out.pose2.obj" (pose_number 2); "dir/out.obj" -> "dir/out.seams.json" (0) (caller frees). */
 static char *sibling_path(const char *path, int pose_number)
 {
     const char *slash = strrchr(path, '/');
@@ -113,7 +116,7 @@ static char *sibling_path(const char *path, int pose_number)
     if (pose_number > 0)
         snprintf(result, size, "%.*s.pose%d%s", (int)(dot - path), path, pose_number, dot);
     else
-        snprintf(result, size, "%.*sseams.json", slash ? (int)(slash - path + 1) : 0, path);
+        snprintf(result, size, "%.*s.seams.json", (int)(dot - path), path);
     return result;
 }
 
@@ -124,18 +127,40 @@ static void remove_all(char **paths, int count)
             remove(paths[i]);
 }
 
-/* Writes pose files, the mesh, then seams.json; paths[0] = seams, [1..] = poses, filled for the report. */
+/* Whether the two paths name the same existing file. */
+static int same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+}
+
+/* A usage error when `path` (an output) is the input mesh or one of its pose files. */
+static pz_status refuse_input(const pz_cli_args *args, const char *path, pz_ctx *ctx)
+{
+    int clash = same_file(path, args->positionals[0]);
+    for (int p = 0; p < args->pose_path_count && !clash; ++p)
+        clash = same_file(path, args->pose_paths[p]);
+    return clash ? pz_error(ctx, PZ_ERR_USAGE, "prepare: %s: is an input: refusing to overwrite it (choose another -o)",
+                            path)
+                 : PZ_OK;
+}
+
+/*
+ * Writes pose files, the mesh, then the seams file (only when there are
+ * seams); paths[0] = seams (NULL when none), [1..] = poses, filled for the
+ * report.
+ */
 static pz_status write_outputs(const pz_cli_args *args, const pz_prepare_result *result, char **paths,
                                pz_ctx *ctx)
 {
     const pz_mesh *mesh = result->mesh;
     const char *out = args->output_path;
     int separate = pz_format_from_path(out) != PZ_FORMAT_GLB ? mesh->pose_count : 0;
-    for (int p = 0; p <= separate; ++p)
+    for (int p = result->seam_count > 0 ? 0 : 1; p <= separate; ++p)
         if (!(paths[p] = sibling_path(out, p)))
             return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", out);
-    pz_status status = PZ_OK;
-    int written = 1; /* paths[0], seams.json, is written last */
+    pz_status status = paths[0] ? refuse_input(args, paths[0], ctx) : PZ_OK;
+    int written = 1; /* paths[0], the seams, is written last */
     for (; written <= separate && !status; ++written) {
         pz_mesh view = *mesh;
         view.positions = mesh->poses + (size_t)(written - 1) * mesh->vertex_count * 3;
@@ -150,7 +175,7 @@ static pz_status write_outputs(const pz_cli_args *args, const pz_prepare_result 
             rest.poses = NULL;
         }
         status = pz_mesh_write(&rest, out, NULL, ctx);
-        if (!status && (status = pz_prepare_write_seams(result, paths[0], ctx)))
+        if (!status && paths[0] && (status = pz_prepare_write_seams(result, paths[0], ctx)))
             remove(out);
     }
     if (status)
@@ -182,7 +207,8 @@ static pz_status print_json(const pz_cli_args *args, const pz_prepare_result *re
     }
     failed = failed || !cJSON_AddStringToObject(root, "input", args->positionals[0]);
     failed = failed || !cJSON_AddStringToObject(root, "output", args->output_path);
-    failed = failed || !cJSON_AddStringToObject(root, "seams_file", paths[0]);
+    failed = failed || !(paths[0] ? cJSON_AddStringToObject(root, "seams_file", paths[0])
+                                  : cJSON_AddNullToObject(root, "seams_file"));
     cJSON *pose_list = failed ? NULL : cJSON_AddArrayToObject(root, "pose_files");
     failed = failed || !pose_list;
     for (int p = 1; !failed && p <= pose_files; ++p)
@@ -246,8 +272,9 @@ pz_status pz_cli_prepare(const pz_cli_args *args, pz_ctx *ctx)
     if (!status) {
         note_steps(&result->report, path, ctx);
         pz_cli_warn_units(args, path, mesh, used, ctx);
-        pz_note(ctx, "wrote %s: %d vertices, %d faces, %d seam curves", args->output_path,
-                (int)result->mesh->vertex_count, (int)result->mesh->face_count, (int)result->seam_count);
+        pz_note(ctx, "wrote %s: %d vertices, %d faces, %d seam curves%s%s", args->output_path,
+                (int)result->mesh->vertex_count, (int)result->mesh->face_count, (int)result->seam_count,
+                paths[0] ? " in " : "", paths[0] ? paths[0] : "");
     }
     for (int p = 0; paths && p <= pose_files; ++p)
         free(paths[p]);

@@ -2,8 +2,12 @@
 # tests/cli/test_cli_prepare.sh -- `panelize prepare` end to end: a generated
 # bodice is remeshed to about the faces asked for (or the --edge given),
 # stays within the Hausdorff bound, comes out valid (`panelize check`);
-# --json reports every step with its counts; seams.json is a sketch file that
-# `panelize field --sketch` accepts; poses come out with the same connectivity;
+# --json reports every step with its counts; the welded seams go to
+# OUT-stem.seams.json (only when there are seams; never over a user's
+# seams.json or an input), a sketch file that `panelize field --sketch`
+# accepts; poses come out with the same connectivity; a NaN vertex's faces are
+# dropped; a body scanned with (apart from) the garment is kept beside it
+# as a second component, with --keep largest or all;
 # --repair only welds and repairs; --keep all keeps a small part that
 # --keep largest drops; `panelize run --prepare auto` welds an
 # unwelded 4-panel export (report.json's "prepare" object says so) and leaves
@@ -70,7 +74,9 @@ json_checks "prepare --json" \
     "input counts" 'd["counts"]["input_faces"] > 7500'
 check "the steps are on stderr" grep -q 'remesh' "$WORK/err"
 check "prepared.obj written" [ -s dest/prepared.obj ]
-check "seams.json beside it" [ -s dest/seams.json ]
+check "no seams, no seams file" [ ! -e dest/prepared.seams.json ]
+check "no seams.json either" [ ! -e dest/seams.json ]
+json_checks "prepare --json, no seams" "seams_file is null" 'd["seams_file"] is None'
 run check dest/prepared.obj
 expect_ok "the prepared mesh passes check"
 
@@ -96,17 +102,23 @@ PY
 
 # ------------------------------------------------------------------ unwelded panels: seams come back
 split_panels 2 bodice.obj panels.obj
+echo '{"curves": []}' >seams.json # the user's own sketch file: never replaced
 run prepare panels.obj -o welded.obj --json --quiet
 expect_ok "prepare the unwelded panels"
 json_checks "welding" \
     "vertices welded" 'd["counts"]["welded_vertices"] > 0' \
     "seam edges found" 'd["counts"]["seam_edges"] > 0' \
     "two seam curves" 'd["counts"]["seam_curves"] == 2' \
-    "one component" 'd["counts"]["components"] == 1'
-check "seams.json has two curves of points" json_true \
-    'len(d["curves"]) == 2 and all(len(c) > 5 and all(len(p) == 3 for p in c) for c in d["curves"])' seams.json
-run field welded.obj --sketch seams.json -o field --quiet
-expect_ok "field --sketch seams.json"
+    "one component" 'd["counts"]["components"] == 1' \
+    "seams file named after the output" 'd["seams_file"] == "welded.seams.json"'
+check "welded.seams.json has two curves of points" json_true \
+    'len(d["curves"]) == 2 and all(len(c) > 5 and all(len(p) == 3 for p in c) for c in d["curves"])' welded.seams.json
+check "the user's seams.json is untouched" grep -qx '{"curves": \[\]}' seams.json
+run field welded.obj --sketch welded.seams.json -o field --quiet
+expect_ok "field --sketch welded.seams.json"
+ln -s panels.obj clash.seams.json # the seams file would replace the input: refused, nothing written
+expect_error 64 "clash.seams.json" --absent clash.obj -- prepare panels.obj -o clash.obj
+check "the input is intact" cmp -s panels.obj clash.seams.json
 
 # ------------------------------------------------------------------ --repair: no remeshing
 run prepare panels.obj -o repaired.ply --repair --json --quiet
@@ -164,13 +176,66 @@ expect_ok "run --prepare off"
 report_checks "run --prepare off" run-off \
     "mode off, no steps" 'd["prepare"]["mode"] == "off" and "steps" not in d["prepare"]'
 
+# ------------------------------------------------------------------ a NaN vertex (the OBJ reader passes "nan" on)
+python3 - bodice.obj nan.obj <<'PY'
+import sys
+lines = open(sys.argv[1]).read().splitlines()
+n = sum(1 for l in lines if l.startswith('v '))
+with open(sys.argv[2], 'w') as out:
+    out.write('\n'.join(lines) + '\n')
+    out.write('v nan 0 0\nf 1 2 %d\nf 2 3 %d\n' % (n + 1, n + 1))
+PY
+run prepare nan.obj -o nan-out.obj --repair --json --quiet
+expect_ok "prepare with a NaN vertex"
+json_checks "NaN vertex" \
+    "its two faces dropped" 'd["counts"]["nonfinite_faces"] == 2' \
+    "the rest kept" 'd["counts"]["output_faces"] == d["counts"]["input_faces"] - 2'
+run check nan-out.obj
+expect_ok "the repaired mesh passes check"
+
+# ------------------------------------------------------------------ a body scanned with the garment
+# A closed "body" (a tall box inside the bodice, larger in area than it)
+# apart from the garment: neither is a fragment (under 1% of the area), so
+# both stay, as two components, with --keep largest (the default) or all;
+# nothing tells a body from a garment (docs/prepare.md).
+python3 - bodice.obj body.obj <<'PY'
+import sys
+lines = open(sys.argv[1]).read().splitlines()
+v = [[float(x) for x in l.split()[1:4]] for l in lines if l.startswith('v ')]
+n = len(v)
+lo = [min(p[k] for p in v) for k in range(3)]
+hi = [max(p[k] for p in v) for k in range(3)]
+c = [(lo[k] + hi[k]) / 2 for k in range(3)]
+up = max(range(3), key=lambda k: hi[k] - lo[k])
+half = [(hi[k] - lo[k]) * 0.3 for k in range(3)]
+half[up] = (hi[up] - lo[up]) * 1.5  # a tall box: the body, inside the garment, larger in area
+corners = [[c[k] + (half[k] if (i >> k) & 1 else -half[k]) for k in range(3)] for i in range(8)]
+quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+with open(sys.argv[2], 'w') as out:
+    out.write('\n'.join(lines) + '\n')
+    for p in corners: out.write('v %r %r %r\n' % tuple(p))
+    for a, b, cc, d in quads:
+        out.write('f %d %d %d\nf %d %d %d\n' % (n + 1 + a, n + 1 + b, n + 1 + cc, n + 1 + a, n + 1 + cc, n + 1 + d))
+PY
+run prepare body.obj -o body-largest.obj --repair --json --quiet
+expect_ok "prepare a garment with its body (--keep largest)"
+json_checks "body, --keep largest" \
+    "two components, none dropped" 'd["counts"]["components"] == 2 and d["counts"]["dropped_components"] == 0' \
+    "both kept" 'd["counts"]["output_faces"] == d["counts"]["input_faces"] == 8012'
+run prepare body.obj -o body-all.obj --keep all --json --quiet
+expect_ok "prepare a garment with its body (--keep all, remeshed)"
+json_checks "body, --keep all" \
+    "both kept" 'd["counts"]["components"] == 2 and d["counts"]["dropped_components"] == 0' \
+    "remeshed, valid" 'd["steps"]["remesh"]["ran"] is True and d["within_bound"] is True'
+run check body-all.obj
+expect_ok "body and garment, --keep all: passes check"
+
 # ------------------------------------------------------------------ errors
-rm -f seams.json
 : >empty.obj
-expect_error 65 empty.obj --absent e.obj --absent seams.json -- prepare empty.obj -o e.obj
+expect_error 65 empty.obj --absent e.obj --absent e.seams.json -- prepare empty.obj -o e.obj
 printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n' >line.obj
-expect_error 65 "nothing left" --absent l.obj --absent seams.json -- prepare line.obj -o l.obj
-expect_error 64 "too long" --absent big.obj --absent seams.json -- prepare bodice.obj -o big.obj --edge 5000
+expect_error 65 "nothing left" --absent l.obj --absent l.seams.json -- prepare line.obj -o l.obj
+expect_error 64 "too long" --absent big.obj --absent big.seams.json -- prepare panels.obj -o big.obj --edge 5000
 expect_error 64 "--edge" --absent x.obj -- prepare bodice.obj -o x.obj --edge -3
 expect_error 64 "--weld" --absent x.obj -- prepare bodice.obj -o x.obj --weld abc
 expect_error 64 "--keep" --absent x.obj -- prepare bodice.obj -o x.obj --keep some

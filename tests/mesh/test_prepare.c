@@ -2,9 +2,12 @@
  * tests/mesh/test_prepare.c -- scan-ready input (mesh/prepare.c, issue 8):
  *  - a generated bodice corrupted on purpose (vertex noise, 1% duplicated
  *    faces, three non-manifold vertices, 20 tiny fragments, a slice of
- *    slivers) comes out manifold, single-component, well shaped (smallest
+ *    slivers, flipped faces, NaN corners, fins: a third face on an edge)
+ *    comes out manifold, oriented, single-component, well shaped (smallest
  *    angle over 20 degrees for 99% of faces) and within 0.5% of the diagonal
- *    of the CLEAN bodice (measured here, independently of the report);
+ *    of the CLEAN bodice (measured here, independently of the report), every
+ *    defect counted; also from a 120K-face bodice with a jagged (noisy)
+ *    outline;
  *  - the bodice split into 4 unwelded panels welds back into one surface and
  *    its 4 seams come back as 4 curves lying on the panel borders, with or
  *    without remeshing;
@@ -164,22 +167,54 @@ static double noise(uint32_t *state)
     return (double)(*state >> 8) / (double)(1u << 23) - 1.0;
 }
 
-/* The bodice with every defect the issue lists. */
-static pz_mesh *corrupted_bodice(const pz_mesh *clean, int32_t *duplicates, pz_ctx *ctx)
+/* 1 for each vertex on the outline (an edge with one face). */
+static uint8_t *outline_vertices(const pz_mesh *mesh, pz_ctx *ctx)
+{
+    pz_topology *topology = NULL;
+    REQUIRE_OK(pz_topology_build(mesh, &topology, ctx), *ctx);
+    uint8_t *on_outline = malloc((size_t)mesh->vertex_count + 1);
+    REQUIRE(on_outline, "out of memory");
+    memcpy(on_outline, topology->vertex_on_boundary, (size_t)mesh->vertex_count);
+    pz_topology_free(&topology);
+    return on_outline;
+}
+
+/* What corrupted_bodice added, for the checks. */
+typedef struct corruption {
+    int32_t duplicates, flipped, nonfinite, fins;
+} corruption;
+
+/*
+ * The bodice with every defect the issue lists, and the ones repair must
+ * also handle: vertex noise (0.2 mm, plus outline_noise mm on the outline:
+ * a scanned hem, jagged at the input's scale), 1% duplicated faces, three
+ * non-manifold vertices, 20 tiny fragments, a slice of slivers, faces
+ * flipped against their neighbours, faces with a NaN corner, and three
+ * "fins" (a third face on an interior edge).
+ */
+static pz_mesh *corrupted_bodice(const pz_mesh *clean, double outline_noise, corruption *added, pz_ctx *ctx)
 {
     pz_mesh *mesh = NULL;
     REQUIRE_OK(pz_mesh_copy(clean, &mesh, ctx), *ctx);
     int32_t f0 = mesh->face_count, v0 = mesh->vertex_count;
-    grow(mesh, 1000, 2000);
+    grow(mesh, 1000, f0 / 100 + 2000);
+    memset(added, 0, sizeof *added);
+    uint8_t *on_outline = outline_vertices(clean, ctx);
     uint32_t seed = 12345;
-    for (int32_t i = 0; i < 3 * v0; ++i)
-        mesh->positions[i] += 0.2 * noise(&seed); /* 0.2 mm: scanner noise */
-    *duplicates = 0;
+    for (int32_t i = 0; i < 3 * v0; ++i) /* scanner noise */
+        mesh->positions[i] += (0.2 + (on_outline[i / 3] ? outline_noise : 0.0)) * noise(&seed);
+    free(on_outline);
     for (int32_t f = 0; f < f0; f += 100) /* 1% duplicated, outside the slice of slivers below */
         if (f < f0 / 2 || f >= f0 / 2 + 300) {
             add_face(mesh, mesh->faces[3 * f], mesh->faces[3 * f + 1], mesh->faces[3 * f + 2]);
-            ++*duplicates;
+            ++added->duplicates;
         }
+    for (int32_t f = 50; f < f0 / 2; f += 100) { /* flipped: 0.5% of the faces, none of them duplicated */
+        int32_t *c = mesh->faces + 3 * (size_t)f, swap = c[1];
+        c[1] = c[2];
+        c[2] = swap;
+        ++added->flipped;
+    }
     for (int i = 0; i < 3; ++i) { /* three non-manifold vertices: a triangle hanging by one corner */
         int32_t v = mesh->faces[3 * (f0 / 4 * i + 7)];
         const double *p = mesh->positions + 3 * (size_t)v;
@@ -193,36 +228,89 @@ static pz_mesh *corrupted_bodice(const pz_mesh *clean, int32_t *duplicates, pz_c
         add_face(mesh, a, b, d);
         add_face(mesh, a, d, c);
     }
+    for (int i = 0; i < 3; ++i) { /* fins: a third face standing 10 mm off an edge of an untouched face */
+        int32_t f = f0 / 2 + 1000 + f0 / 10 * i + 25;
+        int32_t a = mesh->faces[3 * f], b = mesh->faces[3 * f + 1];
+        const double *p = mesh->positions + 3 * (size_t)a, *q = mesh->positions + 3 * (size_t)b;
+        int32_t top = add_vertex(mesh, (p[0] + q[0]) / 2 + 10, (p[1] + q[1]) / 2 + 10, (p[2] + q[2]) / 2 + 10);
+        add_face(mesh, b, a, top);
+        ++added->fins;
+    }
+    for (int i = 0; i < 2; ++i) { /* a NaN vertex (a scanner's dropout) in two faces beside an untouched face */
+        int32_t f = f0 / 2 + 1000 + f0 / 10 * (i + 3) + 75;
+        int32_t a = mesh->faces[3 * f], b = mesh->faces[3 * f + 1], c = mesh->faces[3 * f + 2];
+        int32_t bad = add_vertex(mesh, NAN, 0.0, 0.0);
+        add_face(mesh, a, bad, b);
+        add_face(mesh, b, bad, c);
+        added->nonfinite += 2;
+    }
     add_slivers(mesh, f0 / 2, f0 / 2 + 300, 1); /* a slice of slivers */
     return mesh;
 }
 
-static void test_corrupted_bodice(void)
+/* Sum over the faces of (area vector . (centroid - bounding-box centre)): its sign is the orientation. */
+static double outwardness(const pz_mesh *mesh)
+{
+    double lo[3], hi[3], sum = 0.0;
+    pz_mesh_bbox(mesh, lo, hi);
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const double *a = mesh->positions + 3 * (size_t)mesh->faces[3 * f],
+                     *b = mesh->positions + 3 * (size_t)mesh->faces[3 * f + 1],
+                     *c = mesh->positions + 3 * (size_t)mesh->faces[3 * f + 2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        for (int k = 0; k < 3; ++k)
+            sum += n[k] * ((a[k] + b[k] + c[k]) / 3 - (lo[k] + hi[k]) / 2);
+    }
+    return sum;
+}
+
+/*
+ * The corrupted bodice of `faces` faces (outline noise in mm) prepared to
+ * `target` faces: valid (manifold, consistently oriented), one piece,
+ * oriented as the clean bodice, 99% of its faces well shaped, within the
+ * bound of the clean bodice, and every defect counted. 120K faces with 1 mm
+ * of outline noise to 8000 or 5000 faces is a scan's case: its hem turns at
+ * every vertex, and the faces beside it fold by noise (locking every such
+ * turn and fold, as before, left 98.7% and 96.9% well shaped).
+ */
+static void test_corrupted_bodice(int32_t faces, double outline_noise, int32_t target)
 {
     pz_ctx ctx = quiet_context();
-    pz_mesh *clean = bodice(20000, 0, &ctx);
-    int32_t duplicates = 0;
-    pz_mesh *mesh = corrupted_bodice(clean, &duplicates, &ctx);
+    pz_mesh *clean = bodice(faces, 0, &ctx);
+    corruption added;
+    pz_mesh *mesh = corrupted_bodice(clean, outline_noise, &added, &ctx);
     CHECK(!is_valid(mesh), "the corrupted bodice should be invalid");
+    pz_prepare_options options = {.target_faces = target};
     pz_prepare_result *result = NULL;
-    REQUIRE_OK(pz_prepare(mesh, NULL, &result, &ctx), ctx);
+    REQUIRE_OK(pz_prepare(mesh, &options, &result, &ctx), ctx);
     const pz_prepare_report *r = &result->report;
     const pz_mesh *out = result->mesh;
-    CHECK(is_valid(out), "output is not a valid manifold mesh");
-    CHECK(component_count(out) == 1, "%d components", (int)component_count(out));
+    CHECK(is_valid(out), "%d faces: output is not a valid manifold, oriented mesh", (int)faces);
+    CHECK(component_count(out) == 1, "%d faces: %d components", (int)faces, (int)component_count(out));
+    CHECK(outwardness(out) * outwardness(clean) > 0.0, "%d faces: the output is oriented the other way", (int)faces);
     double shaped = well_shaped(out);
-    CHECK(shaped >= 0.99, "only %.4f of the faces have every angle over 20 degrees", shaped);
+    CHECK(shaped >= 0.99, "%d faces, outline noise %g mm: only %.4f of the faces have every angle over 20 degrees",
+          (int)faces, outline_noise, shaped);
     CHECK(fabs(r->min_angle_over_20_fraction - shaped) < 1e-9, "report says %g, measured %g",
           r->min_angle_over_20_fraction, shaped);
     double bound = 0.005 * diagonal(clean), d = distance_both_ways(out, out->positions, clean, clean->positions);
-    CHECK(d < bound, "Hausdorff to the clean bodice %.3f mm, bound %.3f mm", d, bound);
+    CHECK(d < bound, "%d faces: Hausdorff to the clean bodice %.3f mm, bound %.3f mm", (int)faces, d, bound);
     CHECK(r->within_bound && r->hausdorff < r->hausdorff_bound, "report: %.3f of %.3f", r->hausdorff,
           r->hausdorff_bound);
-    CHECK(r->duplicate_faces == duplicates, "%d duplicate faces dropped, %d added", (int)r->duplicate_faces,
-          (int)duplicates);
+    CHECK(r->duplicate_faces == added.duplicates, "%d duplicate faces dropped, %d added", (int)r->duplicate_faces,
+          (int)added.duplicates);
+    CHECK(r->flipped_faces == added.flipped, "%d faces flipped back, %d flipped", (int)r->flipped_faces,
+          (int)added.flipped);
+    CHECK(r->nonfinite_faces == added.nonfinite, "%d faces with a NaN corner dropped, %d added",
+          (int)r->nonfinite_faces, (int)added.nonfinite);
+    CHECK(r->nonmanifold_edge_faces == added.fins, "%d faces dropped beyond two on an edge, %d fins added",
+          (int)r->nonmanifold_edge_faces, (int)added.fins);
     CHECK(r->split_vertices >= 3, "%d vertices split, 3 non-manifold", (int)r->split_vertices);
     CHECK(r->dropped_components == 23, "%d fragments dropped, 20 + 3 hanging triangles", (int)r->dropped_components);
-    CHECK(abs(out->face_count - 20000) < 2000, "%d faces, about 20000 wanted", (int)out->face_count);
+    CHECK(abs(out->face_count - target) < target / 10, "%d faces, about %d wanted", (int)out->face_count, (int)target);
+    printf("corrupted bodice, %d faces, outline noise %g mm: %d faces out, well shaped %.4f, %.3f mm from the clean "
+           "one (bound %.3f)\n", (int)faces, outline_noise, (int)out->face_count, shaped, d, bound);
     pz_prepare_result_free(&result);
     CHECK(result == NULL, "free does not clear the pointer");
     pz_mesh_free(&mesh);
@@ -426,9 +514,8 @@ static void test_decimation(void)
               (int)result->mesh->face_count);
         CHECK(is_valid(result->mesh), "%s: invalid output", what);
         CHECK(component_count(result->mesh) == 1, "%s: %d components", what, (int)component_count(result->mesh));
-        /* noisy: every turn of its jagged outline stays locked, with short edges beside it */
         double shaped = well_shaped(result->mesh);
-        CHECK(shaped > (i ? 0.98 : 0.99), "%s: well shaped %.3f", what, shaped);
+        CHECK(shaped > 0.99, "%s: well shaped %.3f", what, shaped);
         double d = distance_both_ways(result->mesh, result->mesh->positions, clean, clean->positions);
         CHECK(d < bound, "%s: %.3f mm from the clean bodice, bound %.3f", what, d, bound);
         CHECK(r->within_bound, "%s: report says out of bound (%.3f mm)", what, r->hausdorff);
@@ -695,9 +782,51 @@ static void test_shared_poses(void)
     pz_mesh_free(&mesh);
 }
 
+/*
+ * Automatic mode on the shared face scan (34K faces, detail finer than 10000
+ * faces can hold: 1.48 mm from its input at 10000, 1.29 at 20000, bound
+ * 1.04): the result is either a remesh within the bound (measured here) or
+ * the input kept as it is, and the remesh step says which.
+ */
+static void test_shared_scan_auto(void)
+{
+    const char *dir = test_shared_data();
+    if (!dir) {
+        printf("shared face scan: skipped (no ../shared/data)\n");
+        return;
+    }
+    pz_ctx ctx = quiet_context();
+    char path[4096];
+    snprintf(path, sizeof path, "%s/surfaces/face-scan.obj", dir);
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_read(path, &mesh, &ctx), ctx);
+    pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, NULL);
+    pz_prepare_result *result = NULL;
+    REQUIRE_OK(pz_prepare_auto(mesh, NULL, &result, &ctx), ctx);
+    const pz_prepare_report *r = &result->report;
+    const char *detail = r->steps[PZ_PREPARE_REMESH].detail;
+    double bound = 0.005 * diagonal(mesh);
+    double d = distance_both_ways(result->mesh, result->mesh->positions, mesh, mesh->positions);
+    CHECK(d < bound, "face scan, auto: %.3f mm from the input, bound %.3f mm", d, bound);
+    CHECK(r->within_bound, "face scan, auto: report says out of bound (%.3f mm)", r->hausdorff);
+    CHECK(is_valid(result->mesh), "face scan, auto: invalid output");
+    if (r->steps[PZ_PREPARE_REMESH].ran)
+        CHECK(strstr(detail, "retried") != NULL, "face scan, auto: remeshed without a retry: '%s'", detail);
+    else
+        CHECK(result->mesh->face_count == mesh->face_count && strstr(detail, "kept") && strstr(detail, "bound"),
+              "face scan, auto: %d faces out of %d, remesh '%s'", (int)result->mesh->face_count,
+              (int)mesh->face_count, detail);
+    printf("face scan, auto: %d -> %d faces, %.3f mm (bound %.3f): %s\n", (int)mesh->face_count,
+           (int)result->mesh->face_count, d, bound, detail);
+    pz_prepare_result_free(&result);
+    pz_mesh_free(&mesh);
+}
+
 int main(void)
 {
-    test_corrupted_bodice();
+    test_corrupted_bodice(20000, 0.0, 20000);
+    test_corrupted_bodice(120000, 1.0, 8000);
+    test_corrupted_bodice(120000, 1.2, 5000);
     test_unwelded_panels();
     test_decimation();
     test_cgal_decimate();
@@ -707,5 +836,6 @@ int main(void)
     test_bad_input();
     test_shared_garments();
     test_shared_poses();
+    test_shared_scan_auto();
     return test_finish();
 }
