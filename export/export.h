@@ -121,7 +121,9 @@ pz_status pz_export_read_allowances(const char *path, const pz_pattern *pattern,
  * areas. panel_mirror (panel_count, may be NULL): the mirror panel of each
  * panel (pz_segment_panel.mirror_panel): when two pieces are mirror images
  * in 2D as well (within 1 mm RMS), the first gets cut_quantity 2 and the
- * second mirrored = 1. panel_names
+ * second mirrored = 1, and every seam reaching that hidden second piece
+ * takes the labels of its mirror twin on the drawn side (so the mirrored
+ * cut's notches match its partner's; docs/export.md). panel_names
  * (may be NULL, entries may be NULL). Caller frees with pz_pieces_free.
  * Piece i is panel i. The cut line closes every dart's V by the line across
  * its mouth (a folded dart: never cut into). Notches: cut_point and depth_mm

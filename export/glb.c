@@ -5,7 +5,13 @@
  *
  *  - Vertices are the cut mesh's (pattern->mesh): a garment vertex on a seam
  *    is written once per panel, because its pattern coordinates differ.
- *    Positions are the cut mesh's, i.e. the garment's (mm).
+ *    Positions are the cut mesh's, i.e. the garment's, written in metres
+ *    (glTF's unit; the shim scales the millimetres).
+ *  - Colours: panels that share a seam never share a colour: a greedy
+ *    colouring of the panel adjacency (panels by decreasing neighbour count,
+ *    then by index; each takes the first palette colour none of its coloured
+ *    neighbours has), deterministic; 12 palette colours, more generated
+ *    (mesh/gltf_shim.h) if a panel ever needs them.
  *  - TEXCOORD_0: each vertex's uv goes through its piece's marker placement
  *    (copy 0) and is divided by the fabric width (u) and the marker length
  *    (v), so the texture space is the marker: a render of marker.svg's fabric
@@ -13,8 +19,14 @@
  *    second piece of a mirrored pair has no placement of its own: it takes
  *    its partner's mirrored copy, aligned by the centroids of the cut lines
  *    (the pieces are mirror images within 1 mm RMS, pz_pieces_build) and
- *    turned by the copy's rotation. Without a marker, uv is normalized by the
- *    pattern's bounding box. glTF's v runs down: the shim flips it.
+ *    turned by the copy's rotation. Pieces the marker left out (wider than
+ *    the fabric), and the hidden partners of such pieces, get a layout of
+ *    their own after the marker's end: rows of their cut-line boxes from
+ *    (0, length + gap), as wide as the fabric (a piece wider than the fabric
+ *    alone in its row), in piece order, so their texcoords lie beyond v = 1
+ *    (u may pass 1) and never on the marker's pieces or on one another.
+ *    Without a marker, uv is normalized by the pattern's bounding box.
+ *    glTF's v runs down: the shim flips it.
  *  - Seams: inputs->layout_* polylines (garment vertex ids) when given, else
  *    every pattern seam's side A and every dart's tip and leg A, as a LINES
  *    primitive over garment positions.
@@ -93,6 +105,32 @@ static uv_map piece_map(const pz_pieces *pieces, const pz_marker *marker, int32_
     return map;
 }
 
+/*
+ * The pieces without a place in the marker (left out, or the hidden partner of one left out): rows of their
+ * cut-line boxes after the marker's end, gap apart, as wide as the fabric, in piece order.
+ */
+static void place_after_marker(const pz_pieces *pieces, const pz_marker *marker, double gap, int32_t panel_count,
+                               uv_map *maps)
+{
+    gap = gap > 0 ? gap : 5.0;
+    double x = 0, y = marker->length_mm + gap, row_height = 0;
+    for (int32_t i = 0; i < pieces->piece_count; ++i) {
+        const pz_piece *piece = &pieces->pieces[i];
+        int32_t panel = piece->panel;
+        if (panel < 0 || panel >= panel_count || maps[panel].placed || piece->cut_count < 1)
+            continue;
+        double width = piece->bbox_max[0] - piece->bbox_min[0], height = piece->bbox_max[1] - piece->bbox_min[1];
+        if (x > 0 && x + width > marker->fabric_width_mm) {
+            x = 0;
+            y += row_height + gap;
+            row_height = 0;
+        }
+        maps[panel] = (uv_map){{piece->bbox_min[0], piece->bbox_min[1]}, {x, y}, {1, 1}, 1};
+        x += width + gap;
+        row_height = fmax(row_height, height);
+    }
+}
+
 /* Pattern coordinates normalized to the marker (or to the pattern's box without one). */
 static pz_status marker_texcoords(const pz_export_inputs *inputs, double *texcoords, pz_ctx *ctx)
 {
@@ -117,6 +155,9 @@ static pz_status marker_texcoords(const pz_export_inputs *inputs, double *texcoo
         if (panel >= 0 && panel < pattern->panel_count)
             maps[panel] = piece_map(pieces, marker, i);
     }
+    if (marker && pieces)
+        place_after_marker(pieces, marker, inputs->options ? inputs->options->gap_mm : 5.0, pattern->panel_count,
+                           maps);
     double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY};
     for (int32_t v = 0; v < mesh->vertex_count; ++v)
         for (int d = 0; d < 2; ++d) {
@@ -206,6 +247,89 @@ static pz_status seam_lines_build(const pz_export_inputs *inputs, seam_lines *li
     return PZ_OK;
 }
 
+/* ------------------------------------------------------------------ panel colours */
+
+typedef struct panel_degree {
+    int32_t panel, degree;
+} panel_degree;
+
+static int compare_degree(const void *a, const void *b)
+{
+    const panel_degree *p = a, *q = b;
+    if (p->degree != q->degree)
+        return (p->degree < q->degree) - (p->degree > q->degree);
+    return (p->panel > q->panel) - (p->panel < q->panel);
+}
+
+static int compare_int64(const void *a, const void *b)
+{
+    int64_t p = *(const int64_t *)a, q = *(const int64_t *)b;
+    return (p > q) - (p < q);
+}
+
+/*
+ * colour (panel_count): a colour index per panel such that panels sharing a seam differ. Greedy (Welsh-Powell
+ * order): O(S log S + P log P + sum of degrees) for S seams and P panels.
+ */
+static pz_status colour_panels(const pz_pattern *pattern, int32_t *colour, pz_ctx *ctx)
+{
+    int32_t panels = pattern->panel_count, seams = pattern->seam_count, edges = 0;
+    int64_t *pairs = malloc(2 * ((size_t)seams + 1) * sizeof(int64_t));
+    int32_t *start = calloc((size_t)panels + 2, sizeof(int32_t));
+    int32_t *neighbours = malloc(2 * ((size_t)seams + 1) * sizeof(int32_t));
+    panel_degree *order = malloc(((size_t)panels + 1) * sizeof(panel_degree));
+    uint8_t *taken = calloc((size_t)panels + 2, 1);
+    pz_status status = PZ_OK;
+    if (!pairs || !start || !neighbours || !order || !taken) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "garment.glb: out of memory");
+        goto done;
+    }
+    /* Both directions of every seam between two panels, once each (several seams may join a pair). */
+    for (int32_t s = 0; s < seams; ++s) {
+        int64_t a = pattern->seams[s].panel_a, b = pattern->seams[s].panel_b;
+        if (a == b || a < 0 || b < 0 || a >= panels || b >= panels)
+            continue;
+        pairs[edges++] = a * panels + b;
+        pairs[edges++] = b * panels + a;
+    }
+    qsort(pairs, (size_t)edges, sizeof(int64_t), compare_int64);
+    int32_t unique = 0;
+    for (int32_t i = 0; i < edges; ++i)
+        if (i == 0 || pairs[i] != pairs[i - 1])
+            pairs[unique++] = pairs[i];
+    for (int32_t i = 0; i < unique; ++i)   /* CSR: sorted by panel, so each panel's run is contiguous */
+        ++start[pairs[i] / panels + 1];
+    for (int32_t p = 0; p < panels; ++p)
+        start[p + 1] += start[p];
+    for (int32_t i = 0; i < unique; ++i)
+        neighbours[i] = (int32_t)(pairs[i] % panels);
+    for (int32_t p = 0; p < panels; ++p) {
+        order[p] = (panel_degree){p, start[p + 1] - start[p]};
+        colour[p] = -1;
+    }
+    qsort(order, (size_t)panels, sizeof(panel_degree), compare_degree);
+    for (int32_t i = 0; i < panels; ++i) {
+        int32_t p = order[i].panel, degree = order[i].degree;
+        for (int32_t j = start[p]; j < start[p + 1]; ++j)   /* colours above the degree are never needed */
+            if (colour[neighbours[j]] >= 0 && colour[neighbours[j]] <= degree)
+                taken[colour[neighbours[j]]] = 1;
+        int32_t c = 0;
+        while (taken[c])
+            ++c;
+        colour[p] = c;
+        for (int32_t j = start[p]; j < start[p + 1]; ++j)
+            if (colour[neighbours[j]] >= 0 && colour[neighbours[j]] <= degree)
+                taken[colour[neighbours[j]]] = 0;
+    }
+done:
+    free(pairs);
+    free(start);
+    free(neighbours);
+    free(order);
+    free(taken);
+    return status;
+}
+
 /* ------------------------------------------------------------------ the writer */
 
 pz_status pz_export_write_glb(FILE *file, const pz_export_inputs *inputs, const char *name, pz_ctx *ctx)
@@ -213,8 +337,12 @@ pz_status pz_export_write_glb(FILE *file, const pz_export_inputs *inputs, const 
     const pz_mesh *mesh = inputs->pattern->mesh;
     double *texcoords = malloc(((size_t)mesh->vertex_count + 1) * 2 * sizeof(double));
     int32_t *vertex_panel = malloc(((size_t)mesh->vertex_count + 1) * sizeof(int32_t));
+    int32_t *colour = malloc(((size_t)inputs->pattern->panel_count + 1) * sizeof(int32_t));
     seam_lines lines = {0};
-    pz_status status = texcoords && vertex_panel ? PZ_OK : pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
+    pz_status status = texcoords && vertex_panel && colour ? PZ_OK
+                                                           : pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
+    if (status == PZ_OK)
+        status = colour_panels(inputs->pattern, colour, ctx);
     if (status == PZ_OK)
         status = marker_texcoords(inputs, texcoords, ctx);
     if (status == PZ_OK)
@@ -223,7 +351,7 @@ pz_status pz_export_write_glb(FILE *file, const pz_export_inputs *inputs, const 
         memset(vertex_panel, 0, (size_t)mesh->vertex_count * sizeof(int32_t));
         for (int32_t f = 0; f < mesh->face_count; ++f)
             for (int k = 0; k < 3; ++k)
-                vertex_panel[mesh->faces[3 * f + k]] = inputs->pattern->face_panel[f];
+                vertex_panel[mesh->faces[3 * f + k]] = colour[inputs->pattern->face_panel[f]];
         /* glTF strings are UTF-8 (tinygltf's JSON writer throws on anything else). */
         char garment_name[sizeof inputs->pieces->garment_name + 8];
         pz_utf8_clean(inputs->pieces && inputs->pieces->garment_name[0] ? inputs->pieces->garment_name : "garment",
@@ -246,6 +374,7 @@ pz_status pz_export_write_glb(FILE *file, const pz_export_inputs *inputs, const 
     free(lines.points);
     free(lines.indices);
     free(vertex_panel);
+    free(colour);
     free(texcoords);
     return status;
 }

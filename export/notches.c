@@ -8,9 +8,12 @@
  * notch_spacing_mm while at least a quarter spacing remains before the
  * shorter side's end, and at each side's own end: notch j has the label
  * <letters><j+1> on both partners, and, apart from the end notch, the same arc
- * length on both (the end notches differ by the seam's length mismatch, which
- * the metrics report). A notch's direction is the outward normal of the sew
- * edge it lies on (at a vertex, the mean of the two edges' normals); it is
+ * length on both (the end notches sit at each side's own end: they differ by
+ * the seam's length mismatch, which the metrics report). A seam on the hidden
+ * piece of a "Cut 2 mirrored" pair shares its letters and notch count with
+ * its mirror twin (below), so the mirrored cut's labels match its partner's.
+ * A notch's direction is the outward normal of the sew edge it lies on (at a
+ * vertex, the mean of the two edges' normals); it is
  * drawn from where that ray meets the cut line, inward, min(notch_depth_mm,
  * the local allowance) long, so it never reaches the sew line.
  *
@@ -260,11 +263,221 @@ static int seam_notch(const pz_pieces *pieces, const pz_outline_map *map, const 
     return 1;
 }
 
+/* ---------------------------------------------------------------- mirror twins */
+
+/*
+ * Mirror twins. When symmetry keeps a pair (Q, Q') as one "Cut 2 mirrored"
+ * piece, Q' is not drawn: the user cuts Q twice, once mirrored, so the
+ * mirrored copy carries Q's notches. A seam S with a side on Q' is then
+ * matched at the table by its mirror image S' (the seam on Q that S reflects
+ * to): S and S' share one label and one notch count, notch j counted from
+ * mirror-image ends, so "A1" on a drawn piece meets "A1" on the mirrored cut
+ * of its partner. S' is the seam between the mirror panels of S's panels
+ * (a kept pair's partner, else the segmentation's panel_mirror) whose ends
+ * lie nearest S's ends reflected in the mirror plane; the plane is estimated
+ * from the kept pairs (normal along the difference of the two outlines'
+ * centroids, through their midpoints), which exist whenever a piece is hidden.
+ */
+typedef struct seam_twins {
+    int32_t *twin;       /* seam_count: the mirror-image seam sharing the label, or -1 */
+    uint8_t *flipped;    /* seam_count: 1 when the twin runs the other way (notches counted from its end) */
+    int32_t *label;      /* seam_count: the label's letter index (twins share one) */
+} seam_twins;
+
+/* Mean 3D position of a piece's outline vertices. */
+static void outline_centroid(const pz_piece *piece, const double *positions, double out[3])
+{
+    out[0] = out[1] = out[2] = 0;
+    for (int32_t i = 0; i < piece->sew_count; ++i)
+        for (int d = 0; d < 3; ++d)
+            out[d] += positions[3 * (size_t)piece->sew_vertex[i] + d] / piece->sew_count;
+}
+
+/* The mirror plane (unit normal, a point on it) from the kept pairs; 0 when there is none. */
+static int mirror_plane(const pz_pieces *pieces, const double *positions, double normal[3], double point[3])
+{
+    int32_t pairs = 0;
+    normal[0] = normal[1] = normal[2] = point[0] = point[1] = point[2] = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p) {
+        int32_t q = pieces->pieces[p].mirror_piece;
+        if (q <= p)
+            continue;
+        double a[3], b[3], d[3];
+        outline_centroid(&pieces->pieces[p], positions, a);
+        outline_centroid(&pieces->pieces[q], positions, b);
+        for (int k = 0; k < 3; ++k)
+            d[k] = a[k] - b[k];
+        double sign = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2] < 0 ? -1 : 1;
+        for (int k = 0; k < 3; ++k) {
+            normal[k] += sign * d[k];
+            point[k] += 0.5 * (a[k] + b[k]);
+        }
+        ++pairs;
+    }
+    double length = sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    if (pairs == 0 || !(length > 0))
+        return 0;
+    for (int k = 0; k < 3; ++k) {
+        normal[k] /= length;
+        point[k] /= pairs;
+    }
+    return 1;
+}
+
+static double distance3(const double *a, const double *b)
+{
+    return sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+/* The panel a seam side on `panel` reflects to: a kept pair's partner, else the segmentation's mirror. */
+static int32_t mirror_of(const pz_pieces *pieces, const int32_t *panel_mirror, int32_t panel)
+{
+    if (pieces->pieces[panel].mirror_piece >= 0)
+        return pieces->pieces[panel].mirror_piece;
+    int32_t m = panel_mirror ? panel_mirror[panel] : -1;
+    return m >= 0 && m < pieces->piece_count ? m : -1;
+}
+
+typedef struct seam_key {
+    int64_t panels;      /* min panel * count + max panel */
+    int32_t seam;
+} seam_key;
+
+static int compare_seam_key(const void *a, const void *b)
+{
+    const seam_key *p = a, *q = b;
+    if (p->panels != q->panels)
+        return (p->panels > q->panels) - (p->panels < q->panels);
+    return (p->seam > q->seam) - (p->seam < q->seam);
+}
+
+static int64_t panel_pair_key(int32_t a, int32_t b, int32_t count)
+{
+    return (int64_t)(a < b ? a : b) * count + (a < b ? b : a);
+}
+
+/* Seam s's best mirror twin among the seams joining its panels' mirrors (sorted keys), or -1. */
+static int32_t find_twin(const pz_pattern *pattern, const pz_pieces *pieces, const int32_t *panel_mirror,
+                         const seam_key *keys, const double normal[3], const double point[3], int32_t s,
+                         uint8_t *flipped, double *score)
+{
+    const pz_seam *seam = &pattern->seams[s];
+    int32_t ma = mirror_of(pieces, panel_mirror, seam->panel_a), mb = mirror_of(pieces, panel_mirror, seam->panel_b);
+    if (ma < 0 || mb < 0 || seam->pair_count < 2)
+        return -1;
+    const double *positions = pattern->mesh->positions;
+    double ends[2][3];
+    for (int e = 0; e < 2; ++e) {   /* S's ends reflected in the plane */
+        const double *x = &positions[3 * (size_t)seam->side_a[e ? seam->pair_count - 1 : 0]];
+        double along = (x[0] - point[0]) * normal[0] + (x[1] - point[1]) * normal[1] + (x[2] - point[2]) * normal[2];
+        for (int k = 0; k < 3; ++k)
+            ends[e][k] = x[k] - 2 * along * normal[k];
+    }
+    seam_key probe = {panel_pair_key(ma, mb, pieces->piece_count), -1};
+    size_t lo = 0, hi = (size_t)pattern->seam_count;
+    while (lo < hi) {   /* the first key >= probe */
+        size_t mid = (lo + hi) / 2;
+        if (compare_seam_key(&keys[mid], &probe) < 0)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    int32_t best = -1;
+    *score = INFINITY;
+    for (size_t i = lo; i < (size_t)pattern->seam_count && keys[i].panels == probe.panels; ++i) {
+        const pz_seam *other = &pattern->seams[keys[i].seam];
+        if (other->pair_count < 2)
+            continue;
+        const double *start = &positions[3 * (size_t)other->side_a[0]];
+        const double *end = &positions[3 * (size_t)other->side_a[other->pair_count - 1]];
+        double same = distance3(ends[0], start) + distance3(ends[1], end);
+        double reverse = distance3(ends[0], end) + distance3(ends[1], start);
+        if (fmin(same, reverse) < *score) {
+            *score = fmin(same, reverse);
+            best = keys[i].seam;
+            *flipped = reverse < same;
+        }
+    }
+    return best;
+}
+
+static pz_status seam_twins_build(const pz_pieces *pieces, const pz_pattern *pattern, const int32_t *panel_mirror,
+                                  seam_twins *twins, pz_ctx *ctx)
+{
+    int32_t count = pattern->seam_count;
+    twins->twin = malloc(((size_t)count + 1) * sizeof(int32_t));
+    twins->label = malloc(((size_t)count + 1) * sizeof(int32_t));
+    twins->flipped = calloc((size_t)count + 1, 1);
+    double *scores = malloc(((size_t)count + 1) * sizeof(double));
+    seam_key *keys = malloc(((size_t)count + 1) * sizeof(seam_key));
+    if (!twins->twin || !twins->label || !twins->flipped || !scores || !keys) {
+        free(scores);
+        free(keys);
+        return pz_error(ctx, PZ_ERR_NOMEM, "export: out of memory placing notches");
+    }
+    for (int32_t s = 0; s < count; ++s) {
+        twins->twin[s] = -1;
+        scores[s] = INFINITY;
+        keys[s] = (seam_key){panel_pair_key(pattern->seams[s].panel_a, pattern->seams[s].panel_b, pieces->piece_count),
+                             s};
+    }
+    qsort(keys, (size_t)count, sizeof(seam_key), compare_seam_key);
+    double normal[3], point[3];
+    int have_plane = mirror_plane(pieces, pattern->mesh->positions, normal, point);
+    for (int32_t s = 0; have_plane && s < count; ++s) {
+        const pz_seam *seam = &pattern->seams[s];
+        if (!pieces->pieces[seam->panel_a].mirrored && !pieces->pieces[seam->panel_b].mirrored)
+            continue;   /* both sides drawn: their own label matches already */
+        uint8_t flipped = 0;
+        double score;
+        int32_t t = find_twin(pattern, pieces, panel_mirror, keys, normal, point, s, &flipped, &score);
+        if (t < 0 || t == s || score >= scores[s] || score >= scores[t])
+            continue;
+        for (int32_t k = 0; k < 2; ++k) {   /* a better match replaces an earlier one on either seam */
+            int32_t u = k ? t : s, old = twins->twin[u];
+            if (old >= 0) {
+                twins->twin[old] = -1;
+                scores[old] = INFINITY;
+            }
+        }
+        twins->twin[s] = t, twins->twin[t] = s;
+        twins->flipped[s] = twins->flipped[t] = flipped;
+        scores[s] = scores[t] = score;
+    }
+    /* Letters: one per seam, twins sharing the first one's; consecutive. */
+    int32_t next = 0;
+    for (int32_t s = 0; s < count; ++s)
+        twins->label[s] = twins->twin[s] >= 0 && twins->twin[s] < s ? twins->label[twins->twin[s]] : next++;
+    free(scores);
+    free(keys);
+    return PZ_OK;
+}
+
+static void seam_twins_free(seam_twins *twins)
+{
+    free(twins->twin);
+    free(twins->flipped);
+    free(twins->label);
+}
+
 /* ---------------------------------------------------------------- seams */
+
+/* The shorter side's length of seam s in the pattern plane. */
+static double seam_shorter_side(const pz_pattern *pattern, const double *uv, int32_t s)
+{
+    const pz_seam *seam = &pattern->seams[s];
+    double length[2] = {0, 0};
+    const int32_t *side[2] = {seam->side_a, seam->side_b};
+    for (int32_t j = 1; j < seam->pair_count; ++j)
+        for (int k = 0; k < 2; ++k)
+            length[k] += hypot(uv[2 * side[k][j]] - uv[2 * side[k][j - 1]],
+                               uv[2 * side[k][j] + 1] - uv[2 * side[k][j - 1] + 1]);
+    return fmin(length[0], length[1]);
+}
 
 static pz_status add_seam_notches(pz_pieces *pieces, const pz_pattern *pattern, const double *uv,
                                   const pz_outline_map *map, const pz_export_options *options,
-                                  size_t *capacity, int32_t s, pz_ctx *ctx)
+                                  const seam_twins *twins, size_t *capacity, int32_t s, pz_ctx *ctx)
 {
     const pz_seam *seam = &pattern->seams[s];
     if (seam->pair_count < 2)
@@ -276,13 +489,20 @@ static pz_status add_seam_notches(pz_pieces *pieces, const pz_pattern *pattern, 
         length[0] = sides[0].arc[seam->pair_count - 1];
         length[1] = sides[1].arc[seam->pair_count - 1];
     }
+    /* A mirror twin has the same notches, counted from its mirror-image end. */
+    int32_t twin = twins->twin[s];
+    int from_end = twin >= 0 && twin < s && twins->flipped[s];
     double spacing = options->notch_spacing_mm, shorter = fmin(length[0], length[1]);
+    if (twin >= 0)
+        shorter = fmin(shorter, seam_shorter_side(pattern, uv, twin));
     int32_t interior = shorter > 1.25 * spacing ? (int32_t)floor((shorter - 0.25 * spacing) / spacing) : 0;
     for (int32_t j = 0; ok && j <= interior + 1; ++j) {
         for (int k = 0; k < 2 && ok; ++k) {
             double arc = j == interior + 1 ? length[k] : j * spacing;
+            if (from_end)
+                arc = length[k] - arc;
             pz_notch notch = {.seam = s, .dart = -1};
-            pz_notch_label(s, j, notch.label);
+            pz_notch_label(twins->label[s], j, notch.label);
             int32_t piece = -1;
             if (seam_notch(pieces, map, &sides[k], uv, arc, options, &notch, &piece))
                 ok = append_notch(&pieces->pieces[piece], &capacity[piece], &notch);
@@ -356,16 +576,18 @@ static int add_dart_lines(pz_piece *piece, size_t *capacity, const pz_dart *dart
 /* ---------------------------------------------------------------- entry */
 
 pz_status pz_pieces_add_notches(pz_pieces *pieces, const pz_pattern *pattern, const double *uv,
-                                const pz_outline_map *map, const pz_dart_mouth *mouths,
+                                const pz_outline_map *map, const pz_dart_mouth *mouths, const int32_t *panel_mirror,
                                 const pz_export_options *options, pz_ctx *ctx)
 {
     size_t *capacity = calloc(2 * (size_t)pieces->piece_count + 1, sizeof(size_t));
     if (!capacity)
         return pz_error(ctx, PZ_ERR_NOMEM, "export: out of memory placing notches");
     size_t *line_capacity = capacity + pieces->piece_count;
-    pz_status status = PZ_OK;
+    seam_twins twins = {NULL, NULL, NULL};
+    pz_status status = seam_twins_build(pieces, pattern, panel_mirror, &twins, ctx);
     for (int32_t s = 0; s < pattern->seam_count && status == PZ_OK; ++s)
-        status = add_seam_notches(pieces, pattern, uv, map, options, capacity, s, ctx);
+        status = add_seam_notches(pieces, pattern, uv, map, options, &twins, capacity, s, ctx);
+    seam_twins_free(&twins);
     for (int32_t d = 0; d < pattern->dart_count && status == PZ_OK; ++d) {
         const pz_dart *dart = &pattern->darts[d];
         int32_t p = map->loop_piece[dart->tip];

@@ -29,12 +29,18 @@ typedef struct pz_dart_mouth {
 void pz_pieces_find_dart_mouths(const pz_pattern *pattern, const pz_pieces *pieces, const pz_outline_map *map,
                                 pz_dart_mouth *mouths);
 
-/* The label of seam `seam`, notch `index` (0-based): "A1", ..., "Z9", "AA1". */
+/* The label of letter group `seam` (a seam's, or a mirror twin pair's: notches.c), notch `index` (0-based):
+ * "A1", ..., "Z9", "AA1". */
 void pz_notch_label(int32_t seam, int32_t index, char label[16]);
 
-/* Adds every seam's and dart's notches and every dart's internal lines to the pieces. */
+/*
+ * Adds every seam's and dart's notches and every dart's internal lines to the
+ * pieces. Needs the mirrored pairs found (mirror_piece, mirrored): a seam on
+ * a hidden piece shares its label with its mirror twin on the drawn partner.
+ * panel_mirror: as pz_pieces_build's (may be NULL).
+ */
 pz_status pz_pieces_add_notches(pz_pieces *pieces, const pz_pattern *pattern, const double *uv,
-                                const pz_outline_map *map, const pz_dart_mouth *mouths,
+                                const pz_outline_map *map, const pz_dart_mouth *mouths, const int32_t *panel_mirror,
                                 const pz_export_options *options, pz_ctx *ctx);
 
 /* The sew edge joining outline vertices a and b (consecutive on one piece's outline), or -1. */

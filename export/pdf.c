@@ -16,6 +16,11 @@
  * lines (darts), the grain arrow, and its name, cut count ("Cut 1" / "Cut 2
  * mirrored"), garment, size and extent as text.
  *
+ * The 1:1 sheet is one page when it fits Acrobat's 200 in (5080 mm) page
+ * limit; a larger sheet is cut into several 1:1 pages of at most 5000 mm,
+ * between pieces where a gap allows (sheet_pages below), each labelled
+ * "part K of N".
+ *
  * Tiles: printable area = paper minus 10 mm margins; neighbouring tiles share
  * 10 mm (the overlap band, dashed on the page). A tile whose printable area
  * meets no ink (no cut line, no scale box, no title) is dropped, and so is
@@ -369,20 +374,170 @@ static void set_metadata(cairo_surface_t *surface, const pz_pieces *pieces, cons
     }
 }
 
+/* ------------------------------------------------------------------ pages of the 1:1 sheet */
+
+/*
+ * Acrobat (and the PDF spec's implementation limits) allow pages up to 14400
+ * units, 200 in = 5080 mm. A sheet larger than kPageLimit in either direction
+ * is cut into several 1:1 pages, each at most kPageLimit: first into bands
+ * (top down), then each band into parts (left to right). A cut goes through
+ * the middle of the last gap between pieces (their boxes 20 mm apart) that
+ * keeps the page within the limit and at least kMinPage long, so no piece is
+ * split; only when there is no such gap (a piece or a row longer than the
+ * limit) is the cut made at the limit, and the next page then starts
+ * kOverlap before it (the shared band is printed on both, as on the tiled
+ * pages).
+ */
+static const double kPageLimit = 5000.0;   /* mm; 14173 pt, under 14400 */
+static const double kMinPage = 1250.0;     /* a page cut at a gap is at least this long */
+
+/* An item's extent along one axis. */
+typedef struct span {
+    double lo, hi;
+} span;
+
+static int compare_span(const void *a, const void *b)
+{
+    const span *p = a, *q = b;
+    return (p->lo > q->lo) - (p->lo < q->lo);
+}
+
+/*
+ * Cuts [from, to] along `axis` (0: x, rising; 1: y, falling from the top) where no item box whose other-axis
+ * range meets [other_lo, other_hi] lies; writes the page starts and ends as pairs (at most 2 * capacity values),
+ * returns the number of pages (0 when out of memory).
+ */
+static int32_t split_axis(const sheet *sheet, int axis, double from, double to, double other_lo, double other_hi,
+                          double *bounds, int32_t capacity)
+{
+    span *spans = malloc(((size_t)sheet->item_count + 2) * sizeof(span));
+    if (!spans)
+        return 0;
+    int32_t count = 0, other = 1 - axis;
+    /* In "distance from `from`" units, so both directions are one rising walk. */
+    double sign = axis == 0 ? 1.0 : -1.0, length = fabs(to - from);
+    for (int32_t i = 0; i < sheet->item_count; ++i) {
+        const sheet_item *item = &sheet->items[i];
+        if (item->hi[other] < other_lo || item->lo[other] > other_hi)
+            continue;
+        double a = sign * (item->lo[axis] - from), b = sign * (item->hi[axis] - from);
+        spans[count++] = (span){fmin(a, b), fmax(a, b)};
+    }
+    if (axis == 1)   /* the title line along the top */
+        spans[count++] = (span){0, kTitleBand};
+    qsort(spans, (size_t)count, sizeof(span), compare_span);
+    int32_t pages = 0;
+    double start = 0;
+    while (pages < capacity) {
+        double end = length;
+        if (length - start > kPageLimit) {
+            /* The middle of the last gap between the merged spans that ends the page within the limit. */
+            double reach = start + kPageLimit, covered = start, cut = -1;
+            int32_t i = 0;
+            for (; i < count && spans[i].lo < reach; ++i) {
+                if (spans[i].lo > covered)
+                    cut = 0.5 * (covered + spans[i].lo);
+                covered = fmax(covered, spans[i].hi);
+            }
+            /* Free from `covered` to the next span (beyond the reach): its middle, or the reach. */
+            double next = i < count ? spans[i].lo : length;
+            if (covered < reach)
+                cut = fmin(0.5 * (covered + next), reach);
+            /* A gap too near the page's start would make a sliver of a page: cut through at the reach. */
+            end = cut >= start + kMinPage ? cut : reach;
+        }
+        bounds[2 * pages] = from + sign * start;
+        bounds[2 * pages + 1] = from + sign * end;
+        ++pages;
+        if (end >= length)
+            break;
+        /* A cut through ink (no gap): the next page repeats the overlap band. */
+        int through_ink = 0;
+        for (int32_t i = 0; i < count && !through_ink; ++i)
+            through_ink = spans[i].lo < end && spans[i].hi > end;
+        start = through_ink ? end - kOverlap : end;
+    }
+    free(spans);
+    return pages;
+}
+
+/* The page regions of the sheet (lo x, lo y, hi x, hi y each; malloc'd), row by row from the top. */
+static int32_t sheet_pages(const sheet *sheet, double **regions)
+{
+    /* Every page but the last advances at least kMinPage less the overlap along its axis. */
+    int32_t capacity = (int32_t)(fmax(sheet->width, sheet->height) / (kMinPage - kOverlap)) + 2;
+    double *rows = malloc(2 * (size_t)capacity * sizeof(double));
+    double *columns = malloc(2 * (size_t)capacity * sizeof(double));
+    *regions = malloc(4 * (size_t)capacity * (size_t)capacity * sizeof(double));
+    int32_t count = 0, row_count = rows && columns && *regions
+                                       ? split_axis(sheet, 1, sheet->height, 0, 0, sheet->width, rows, capacity)
+                                       : 0;
+    for (int32_t r = 0; r < row_count; ++r) {
+        double top = rows[2 * r], bottom = rows[2 * r + 1];
+        int32_t column_count = split_axis(sheet, 0, 0, sheet->width, bottom, top, columns, capacity);
+        for (int32_t c = 0; c < column_count; ++c, ++count) {
+            double *region = &(*regions)[4 * count];
+            region[0] = columns[2 * c], region[1] = bottom, region[2] = columns[2 * c + 1], region[3] = top;
+        }
+        if (column_count == 0)
+            row_count = 0, count = 0;
+    }
+    free(rows);
+    free(columns);
+    if (count == 0) {
+        free(*regions);
+        *regions = NULL;
+    }
+    return count;
+}
+
+/* A page of a split sheet: which part it is, in its top-left corner. */
+static void draw_part_label(cairo_t *cr, const double *region, int32_t part, int32_t parts)
+{
+    char text[160];
+    snprintf(text, sizeof text, "part %d of %d of the 1:1 sheet (a PDF page holds at most 5.08 m): join at the "
+             "cut edges", (int)part, (int)parts);
+    cairo_set_source_rgb(cr, 0.3, 0.3, 0.3);
+    draw_text(cr, region[0] + 4, region[3] - 6, 4.0, text);
+}
+
 pz_status pz_export_write_pdf(FILE *file, const pz_export_inputs *inputs, const char *name, pz_ctx *ctx)
 {
     sheet sheet;
     pz_status status = sheet_build(inputs->pieces, &sheet, ctx);
     if (status != PZ_OK)
         return status;
+    double whole[4] = {0, 0, sheet.width, sheet.height}, *regions = whole;
+    int32_t parts = 1;
+    if (sheet.width > kPageLimit || sheet.height > kPageLimit) {
+        parts = sheet_pages(&sheet, &regions);
+        if (parts == 0) {
+            free(sheet.items);
+            return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
+        }
+    }
     pdf_stream stream = {file, 0};
-    cairo_surface_t *surface =
-        cairo_pdf_surface_create_for_stream(write_stream, &stream, sheet.width * PT_PER_MM, sheet.height * PT_PER_MM);
+    cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(
+        write_stream, &stream, (regions[2] - regions[0]) * PT_PER_MM, (regions[3] - regions[1]) * PT_PER_MM);
     set_metadata(surface, inputs->pieces, "pattern, 1:1");
     cairo_t *cr = cairo_create(surface);
-    sheet_space(cr, sheet.height);
-    draw_sheet(cr, inputs, &sheet, NULL, NULL);
-    cairo_show_page(cr);
+    for (int32_t k = 0; k < parts; ++k) {
+        const double *region = &regions[4 * k];
+        cairo_pdf_surface_set_size(surface, (region[2] - region[0]) * PT_PER_MM, (region[3] - region[1]) * PT_PER_MM);
+        cairo_save(cr);
+        /* Sheet point (region lo x, region hi y), the region's top-left, at the page's top-left. */
+        cairo_translate(cr, -region[0] * PT_PER_MM, -(sheet.height - region[3]) * PT_PER_MM);
+        sheet_space(cr, sheet.height);
+        cairo_rectangle(cr, region[0], region[1], region[2] - region[0], region[3] - region[1]);
+        cairo_clip(cr);
+        draw_sheet(cr, inputs, &sheet, parts > 1 ? region : NULL, parts > 1 ? region + 2 : NULL);
+        if (parts > 1)
+            draw_part_label(cr, region, k + 1, parts);
+        cairo_restore(cr);
+        cairo_show_page(cr);
+    }
+    if (regions != whole)
+        free(regions);
     free(sheet.items);
     return finish(surface, cr, &stream, name, ctx);
 }

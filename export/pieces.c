@@ -473,13 +473,13 @@ pz_status pz_pieces_build(const pz_pattern *pattern, const double *uv, const pz_
     }
     for (int32_t p = 0; status == PZ_OK && p < pieces->piece_count; ++p)
         status = cut_line(&pieces->pieces[p], p, mouths, pattern->dart_count, ctx);
+    if (status == PZ_OK) {   /* pairs before notches: a hidden piece's seams take their twins' labels */
+        find_mirrored_pairs(pieces, panel_mirror);
+        status = pz_pieces_add_notches(pieces, pattern, uv, &map, mouths, panel_mirror, options, ctx);
+    }
     if (status == PZ_OK)
-        status = pz_pieces_add_notches(pieces, pattern, uv, &map, mouths, options, ctx);
-    if (status == PZ_OK) {
         for (int32_t p = 0; p < pieces->piece_count; ++p)
             finish_piece(&pieces->pieces[p]);
-        find_mirrored_pairs(pieces, panel_mirror);
-    }
     free(loop_piece);
     free(loop_index);
     free(mouths);

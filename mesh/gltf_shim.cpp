@@ -1673,8 +1673,10 @@ extern "C" pz_status pz_glb_write(const pz_mesh *mesh, const char *path, const p
  * targets), one mesh with a TRIANGLES primitive whose vertices are the given
  * ones (no regrouping: the caller's vertices are already split where the
  * pattern differs) and COLOR_0 as float VEC3 in linear space, plus a LINES
- * primitive; the bytes go to the caller's stream (the export writes all
- * files through temporaries and renames them together).
+ * primitive; positions in metres (the input's millimetres x 0.001, so
+ * Blender and AR viewers show the garment at its size); the bytes go to the
+ * caller's stream (the export writes all files through temporaries and
+ * renames them together).
  */
 
 namespace {
@@ -1710,6 +1712,26 @@ tinygltf::Material plain_material(const char *name, double grey)
     return material;
 }
 
+/* glTF's unit is the metre (spec 3.4); panelize works in millimetres. */
+constexpr double kMetresPerMm = 0.001;
+
+/* Colour of group g: the palette, then hues 137.5 degrees apart (the golden angle) should a colouring need more. */
+uint32_t group_colour(int32_t group)
+{
+    if (group < 12)
+        return kPalette[group];
+    double hue = std::fmod((group - 12) * 137.50776405, 360.0) / 60.0, saturation = 0.55, value = 0.85;
+    double chroma = value * saturation, x = chroma * (1 - std::fabs(std::fmod(hue, 2.0) - 1)), m = value - chroma;
+    double rgb[3] = {0, 0, 0};
+    int sector = (int)hue % 6;
+    const int order[6][3] = {{0, 1, 2}, {1, 0, 2}, {1, 2, 0}, {2, 1, 0}, {2, 0, 1}, {0, 2, 1}};
+    rgb[order[sector][0]] = chroma, rgb[order[sector][1]] = x;  /* the largest, the middle, 0 */
+    uint32_t packed = 0xff;
+    for (int d = 0; d < 3; ++d)
+        packed |= (uint32_t)std::lround((rgb[d] + m) * 255) << (24 - 8 * d);
+    return packed;
+}
+
 void build_garment_model(GlbBuilder &builder, const pz_glb_garment *garment)
 {
     tinygltf::Model &model = builder.model;
@@ -1726,9 +1748,9 @@ void build_garment_model(GlbBuilder &builder, const pz_glb_garment *garment)
     std::vector<float> positions(vertex_count * 3), normal_floats(vertex_count * 3), colours(vertex_count * 3),
         texcoords;
     for (size_t v = 0; v < vertex_count; ++v) {
-        uint32_t colour = kPalette[(size_t)std::max(garment->vertex_group[v], 0) % 12];
+        uint32_t colour = group_colour(std::max(garment->vertex_group[v], 0));
         for (int d = 0; d < 3; ++d) {
-            positions[3 * v + d] = (float)garment->positions[3 * v + d];
+            positions[3 * v + d] = (float)(garment->positions[3 * v + d] * kMetresPerMm);
             normal_floats[3 * v + d] = (float)normals[3 * v + d];
             colours[3 * v + d] = (float)srgb_to_linear((colour >> (24 - 8 * d) & 0xff) / 255.0);
         }
@@ -1759,7 +1781,7 @@ void build_garment_model(GlbBuilder &builder, const pz_glb_garment *garment)
     if (garment->line_index_count > 0) {
         std::vector<float> points((size_t)garment->line_point_count * 3);
         for (size_t i = 0; i < points.size(); ++i)
-            points[i] = (float)garment->line_points[i];
+            points[i] = (float)(garment->line_points[i] * kMetresPerMm);
         std::vector<uint32_t> segments(garment->line_indices, garment->line_indices + garment->line_index_count);
         tinygltf::Primitive seams;
         seams.mode = TINYGLTF_MODE_LINE;

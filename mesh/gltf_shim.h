@@ -19,12 +19,13 @@ extern "C" {
 typedef struct pz_glb_garment {
     int32_t vertex_count;
     const double *positions;      /* vertex_count x 3 (mm) */
-    const int32_t *vertex_group;  /* vertex_count: colour group (panel) of each vertex, >= 0 */
+    const int32_t *vertex_group;  /* vertex_count: colour index of each vertex, >= 0 (0-11: the palette of
+                                     pz_glb_write; above: hues a golden angle apart) */
     const double *texcoords;      /* vertex_count x 2, panelize's convention (v up; flipped for glTF), or NULL */
     int32_t face_count;
     const int32_t *faces;         /* face_count x 3 */
     int32_t line_point_count;
-    const double *line_points;    /* line_point_count x 3: the seams' vertices */
+    const double *line_points;    /* line_point_count x 3: the seams' vertices (mm, written in metres) */
     int32_t line_index_count;     /* even: pairs of line_points indices, one segment each */
     const int32_t *line_indices;
     const char *name;             /* mesh and node name */
@@ -32,8 +33,9 @@ typedef struct pz_glb_garment {
 
 /**
  * Writes `garment` as GLB to an open stream: one mesh with a TRIANGLES
- * primitive (POSITION with min/max, NORMAL (area-weighted), COLOR_0 = the
- * 12-colour palette of pz_glb_write by vertex_group, stored linear,
+ * primitive (POSITION in metres, glTF's unit: the millimetres given x 0.001,
+ * with min/max; NORMAL (area-weighted), COLOR_0 = the colour of vertex_group,
+ * stored linear,
  * TEXCOORD_0 when given) under a white double-sided material, and a LINES
  * primitive for the seams (when line_index_count > 0) under a dark one.
  * `what` names the output in messages. Errors: PZ_ERR_INVALID_MESH for

@@ -4,7 +4,8 @@
  * when they are missing):
  *  - both render (pdftoppm exits 0);
  *  - pattern.pdf is one page; the tiled PDF's pages are A4 or Letter as
- *    asked;
+ *    asked; a sheet larger than a PDF page may be (14400 pt, 5.08 m) is
+ *    several 1:1 pages, each within that, covering the sheet;
  *  - the 10 cm scale box measures 100 mm, on the sheet and on the first
  *    tile: rendered at 254 dpi (0.1 mm per pixel, the spacing of its edges
  *    measured, within 0.2 mm), and in the PDF's own units (a 283.465 pt
@@ -374,6 +375,84 @@ static void test_boxes(void)
     fixture_pieces_free(pieces);
 }
 
+/*
+ * A sheet wider and taller than a PDF page may be (Acrobat: 14400 pt = 5080 mm): 36 pieces of about 1 m and a
+ * 5.6 m long one. pattern.pdf must be several 1:1 pages, each at most 14400 pt, "part K of N" on each, covering
+ * the sheet (their areas add up to the sheet's, plus at most the overlap bands of the cut through the long
+ * piece), the scale box 100 mm in the PDF's units, every piece's name in the text, and poppler renders them.
+ */
+static void test_wide_sheet(void)
+{
+    const int32_t count = 37;
+    pz_pieces *pieces = fixture_pieces_alloc(count);
+    for (int32_t p = 0; p < count; ++p) {
+        char name[32];
+        snprintf(name, sizeof name, "wide_%d", (int)p);
+        if (p == count - 1)
+            fixture_piece_box(&pieces->pieces[p], p, name, 400, 5600, 0);
+        else
+            fixture_piece_box(&pieces->pieces[p], p, name, 800 + 13 * (p % 9), 1100 + 29 * (p % 5), p % 4 == 0);
+    }
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_export_inputs inputs = {.pieces = pieces, .options = &options};
+    char path[300], command[1200];
+    snprintf(path, sizeof path, "%s/wide-pattern.pdf", dir);
+    write_pdf(pz_export_write_pdf, &inputs, path);
+    /* The sheet as pdf.c lays it out: pieces 20 mm apart below a 136 mm band (title, scale box). */
+    double *offsets = malloc(2 * (size_t)count * sizeof(double)), sheet[2];
+    REQUIRE(offsets, "out of memory");
+    pz_pieces_sheet_layout(pieces, 20.0, 136.0, offsets, sheet);
+    free(offsets);
+    double size[2];
+    int pages = pdf_pages(path, size);
+    snprintf(command, sizeof command, "pdfinfo -f 1 -l %d '%s'", pages, path);
+    char *info = run(command);
+    REQUIRE(info, "pdfinfo failed");
+    double area = 0, largest = 0;
+    int listed = 0;
+    for (const char *at = info; (at = strstr(at, "Page ")); ++at) {
+        int page;
+        double w, h;
+        if (sscanf(at, "Page %d size: %lf x %lf", &page, &w, &h) != 3)
+            continue;
+        ++listed;
+        largest = fmax(largest, fmax(w, h));
+        area += (w / (72 / 25.4)) * (h / (72 / 25.4));
+    }
+    free(info);
+    double sheet_area = sheet[0] * sheet[1], overlap = 10.0 * 2 * fmax(sheet[0], sheet[1]);
+    printf("wide sheet %.0f x %.0f mm: %d pages, the largest side %.0f pt, pages cover %.4f of the sheet\n", sheet[0],
+           sheet[1], pages, largest, area / sheet_area);
+    CHECK(sheet[0] > 5080 && sheet[1] > 5080, "the layout is not wider and taller than a page: %.0f x %.0f", sheet[0],
+          sheet[1]);
+    CHECK(pages > 1 && listed == pages && largest <= 14400, "%d pages (%d listed), largest side %.0f pt", pages, listed,
+          largest);
+    CHECK(area >= sheet_area - 1 && area <= sheet_area + overlap, "pages cover %.0f of %.0f mm2", area, sheet_area);
+    snprintf(command, sizeof command, "pdftotext '%s' -", path);
+    char *text = run(command);
+    REQUIRE(text, "pdftotext failed");
+    char label[64];
+    for (int page = 1; page <= pages; ++page) {
+        snprintf(label, sizeof label, "part %d of %d", page, pages);
+        CHECK(strstr(text, label) != NULL, "no '%s'", label);
+    }
+    for (int32_t p = 0; p < count; ++p) {
+        snprintf(label, sizeof label, "%s\n", pieces->pieces[p].name);
+        CHECK(strstr(text, label) != NULL, "%s missing", pieces->pieces[p].name);
+    }
+    free(text);
+    const char *source = getenv("PZ_SOURCE_DIR");
+    if (source && have("/usr/bin/python3")) {
+        snprintf(command, sizeof command, "/usr/bin/python3 '%s/tests/export/pdf_scale_box.py' '%s' >/dev/null", source,
+                 path);
+        CHECK(system(command) == 0, "%s: no 100 x 100 mm rectangle in the PDF's units", path);
+    }
+    snprintf(command, sizeof command, "pdftoppm -r 2 '%s' %s/wide && rm -f %s/wide-*", path, dir, dir);
+    CHECK(system(command) == 0, "pdftoppm failed on %s", path);
+    fixture_pieces_free(pieces);
+}
+
 static void test_bodice(void)
 {
     fixture_pattern fixture;
@@ -389,6 +468,7 @@ int main(void)
         test_skip("poppler-utils (pdfinfo, pdftoppm, pdftotext) not installed");
     REQUIRE(mkdtemp(dir), "mkdtemp");
     test_boxes();
+    test_wide_sheet();
     test_bodice();
     char command[300];
     snprintf(command, sizeof command, "rm -rf %s", dir);

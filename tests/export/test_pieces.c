@@ -156,10 +156,11 @@ static void test_bodice(void)
     CHECK(strcmp(pieces->garment_name, "bodice") == 0 && strcmp(pieces->size_name, "base") == 0, "names %s %s",
           pieces->garment_name, pieces->size_name);
     check_piece_cuts(f.pattern, pieces, "bodice");
-    double worst_end, worst = check_notch_pairs(f.pattern, pieces, f.uv, "bodice", &worst_end);
-    printf("bodice: %d seams, notch pairs differ by %.2e mm at most (%.3f mm at the seams' ends: textile length "
-           "mismatch)\n",
-           (int)f.pattern->seam_count, worst, worst_end);
+    notch_pair_stats pairs = check_notch_pairs(f.pattern, pieces, f.uv, options.notch_spacing_mm, "bodice");
+    check_drawn_labels(f.pattern, pieces, "bodice");
+    printf("bodice: %d seams, notch pairs differ by %.2e mm at most (ends at the corners within %.1e mm; the sides "
+           "differ by %.3f mm: textile length mismatch)\n",
+           (int)f.pattern->seam_count, pairs.interior, pairs.end_corner, pairs.end_mismatch);
     /* Seam edges carry 10 mm, open edges (neck, waist) 25 mm, and both kinds exist on every piece. */
     int32_t mirrored = 0, doubled = 0;
     for (int32_t p = 0; p < pieces->piece_count; ++p) {
@@ -350,6 +351,68 @@ static void dart_case(double half_mouth, int expect_folded)
     pz_pattern_free(&pattern);
 }
 
+/*
+ * Labels on a "Cut 2 mirrored" pair: three flat strips side by side, the centre one (panel 0) its own mirror
+ * image, the right (1) and left (2) mirror images of each other, so 2 is hidden and 1 is cut twice. The seam
+ * 0-2 reaches the hidden piece: its labels must be those of its twin 0-1, so the mirrored cut of panel 1 carries
+ * what panel 0's left edge carries, notch for notch at mirror-image places (the same height).
+ */
+static void test_mirrored_labels(void)
+{
+    const double columns[4] = {-150, -50, 50, 150};
+    pz_mesh *mesh = NULL;
+    REQUIRE_OK(pz_mesh_create(16, 18, &mesh, &ctx), ctx);
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) {
+            double *x = &mesh->positions[3 * (4 * c + r)];
+            x[0] = columns[c], x[1] = 130.0 * r, x[2] = 0;
+        }
+    int32_t face_panel[18], f = 0;
+    const int32_t strip_panel[3] = {2, 0, 1};
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r, f += 2) {
+            int32_t a = 4 * c + r, b = 4 * (c + 1) + r;
+            const int32_t two[6] = {a, b, b + 1, a, b + 1, a + 1};
+            memcpy(&mesh->faces[3 * f], two, sizeof two);
+            face_panel[f] = face_panel[f + 1] = strip_panel[c];
+        }
+    mesh->unit_scale = 1;
+    pz_pattern *pattern = NULL;
+    REQUIRE_OK(pz_pattern_build(mesh, face_panel, NULL, NULL, "strips", &pattern, &ctx), ctx);
+    double *uv = malloc(2 * (size_t)pattern->mesh->vertex_count * sizeof(double));
+    REQUIRE(uv, "out of memory");
+    for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v)
+        uv[2 * v] = pattern->mesh->positions[3 * v], uv[2 * v + 1] = pattern->mesh->positions[3 * v + 1];
+    const int32_t mirror[3] = {0, 2, 1};
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_pieces *pieces = NULL;
+    REQUIRE_OK(pz_pieces_build(pattern, uv, &options, mirror, NULL, &pieces, &ctx), ctx);
+    const pz_piece *centre = &pieces->pieces[0], *right = &pieces->pieces[1];
+    REQUIRE(right->cut_quantity == 2 && pieces->pieces[2].mirrored && pattern->seam_count == 2,
+            "pair not kept (%d, %d) or %d seams", (int)right->cut_quantity, pieces->pieces[2].mirrored,
+            (int)pattern->seam_count);
+    check_notch_pairs(pattern, pieces, uv, options.notch_spacing_mm, "strips");
+    CHECK(check_drawn_labels(pattern, pieces, "strips") == 1, "seam 0-2 does not reach the hidden piece");
+    int matched = 0;
+    for (int32_t i = 0; i < right->notch_count; ++i)
+        for (int32_t j = 0; j < centre->notch_count; ++j)
+            if (centre->notches[j].position[0] < 0 && strcmp(centre->notches[j].label, right->notches[i].label) == 0) {
+                ++matched;
+                CHECK(fabs(centre->notches[j].position[1] - right->notches[i].position[1]) < 1e-9,
+                      "%s at height %.3f on the centre, %.3f on the mirrored cut", right->notches[i].label,
+                      centre->notches[j].position[1], right->notches[i].position[1]);
+            }
+    printf("strips: %d notches on the cut-2 piece, %d of them matched on the centre's left edge (%s .. %s)\n",
+           (int)right->notch_count, matched, right->notches[0].label, right->notches[right->notch_count - 1].label);
+    CHECK(matched == right->notch_count && right->notch_count == 5, "%d of %d matched", matched,
+          (int)right->notch_count);
+    pz_pieces_free(&pieces);
+    free(uv);
+    pz_pattern_free(&pattern);
+    pz_mesh_free(&mesh);
+}
+
 static void test_darts(void)
 {
     dart_case(10, 1);   /* 20 mm mouth: folded (limit: 4 x 15 mm) */
@@ -398,11 +461,13 @@ static void test_shared(void)
             notches += pieces->pieces[p].notch_count;
             cut_points += pieces->pieces[p].cut_count;
         }
-        double worst_end, worst = check_notch_pairs(f.pattern, pieces, f.uv, fixture_garments[g].file, &worst_end);
-        printf("%-26s %2d pieces, %2d seams, %d darts, %4d notches, %5d cut points, pairs %.1e mm (ends %.2f mm), "
-               "%.1f ms\n",
+        notch_pair_stats pairs = check_notch_pairs(f.pattern, pieces, f.uv, options.notch_spacing_mm,
+                                                   fixture_garments[g].file);
+        printf("%-26s %2d pieces, %2d seams, %d darts, %4d notches, %5d cut points, pairs %.1e mm (ends at the "
+               "corners within %.1e mm, sides differ by %.2f mm), %.1f ms\n",
                fixture_garments[g].file, (int)pieces->piece_count, (int)f.pattern->seam_count,
-               (int)f.pattern->dart_count, (int)notches, (int)cut_points, worst, worst_end, ms);
+               (int)f.pattern->dart_count, (int)notches, (int)cut_points, pairs.interior, pairs.end_corner,
+               pairs.end_mismatch, ms);
         pz_pieces_free(&pieces);
         fixture_free(&f);
     }
@@ -417,6 +482,7 @@ int main(void)
     test_random_stars();
     test_labels();
     test_mirrored_pairs();
+    test_mirrored_labels();
     test_darts();
     test_bodice();
     test_shared();
