@@ -31,8 +31,11 @@
  *   bench_param [MAX_FACES [THREADS]]
  *
  * MAX_FACES (default 200000) skips the larger hemispheres; THREADS (default
- * 0 = pz_param_textile's default: threaded from 100K faces; an explicit
- * count >= 2 threads from 8K faces, docs/param.md "Threads").
+ * 0 = pz_param_textile's default: threaded from 100K faces, and only when
+ * the load average leaves a second core; an explicit count >= 2 threads
+ * from 8K faces, docs/param.md "Threads"). load= is what getloadavg
+ * reports (docs/param.md "Speed" also measures with it faked to 0, which
+ * is how libgomp's dynamic teams see a machine that has been idle).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */

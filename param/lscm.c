@@ -356,22 +356,30 @@ cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions
 }
 
 /*
- * cholmod_factorize with OpenMP's dynamic adjustment of team sizes on.
- * CHOLMOD's supernodal factorization (SuiteSparse 5.12) opens its parallel
- * regions with a fixed num_threads(CHOLMOD_OMP_NUM_THREADS), 4: on a 2-core
- * machine, and more so a busy one, those threads mostly spin at barriers
- * (200K faces: the LSCM factorization took 2.8 s of CPU instead of 0.5).
- * With dyn-var set, libgomp caps each team at the cores the load average
- * leaves free. The regions only clear and assemble disjoint entries, so the
+ * cholmod_factorize with no OpenMP team. CHOLMOD 3 (SuiteSparse 5.12) opens
+ * its supernodal factorization's parallel regions with a fixed
+ * num_threads(CHOLMOD_OMP_NUM_THREADS), 4, once or several times per
+ * supernode: hundreds of small regions per factorization. Those regions only
+ * clear and scatter memory (the flops are in the BLAS, reference BLAS being
+ * single-threaded), so a team saves little, and after every region libgomp's
+ * worker threads spin (its default active wait, GOMP_SPINCOUNT 300,000) while
+ * the calling thread goes on alone: on the 2-core machine with an idle
+ * 15-minute load average (libgomp's dynamic teams then allow 2 threads), a
+ * 20K-face textile iteration took 350 ms of CPU instead of 13 and a 3K-face
+ * initialization 170 ms instead of 16, and on a busy machine the spinners
+ * take the core the caller needs (docs/param.md, "Speed"). So the calling
+ * thread's max-active-levels ICV is 0 for the call (every region inside runs
+ * as a team of one; the ICV belongs to the calling task's data environment,
+ * so nothing else in the process is affected) and restored afterwards. The
  * factor does not depend on the team size. Shared with param/textile.c.
  * Returns cholmod_factorize's result (common->status says why it failed).
  */
 int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_common *common)
 {
-    int dynamic = omp_get_dynamic();
-    omp_set_dynamic(1);
+    int levels = omp_get_max_active_levels();
+    omp_set_max_active_levels(0);
     int ok = cholmod_factorize(matrix, factor, common);
-    omp_set_dynamic(dynamic);
+    omp_set_max_active_levels(levels);
     return ok;
 }
 

@@ -24,12 +24,13 @@
  * / sum L over its edges; flipped triangles (signed 2D area <= 0 relative to
  * the sign of the panel's total signed area); boundary self-intersections.
  *
- * Boundary self-intersections: each panel's boundary segments are sorted by
- * their smallest x and swept left to right with an active list of segments
- * whose x-interval is still open; a new segment is tested only against the
- * active ones whose y-interval overlaps, so the cost is O(n log n + k) for k
- * overlapping pairs, never all pairs. Segments sharing a vertex are
- * neighbours, not crossings.
+ * Boundary self-intersections: each panel's boundary segments are bucketed
+ * into a uniform grid of about one cell per segment (count_crossings); two
+ * segments are tested only when they share a cell and their bounding boxes
+ * overlap, each pair once. O(n + b), b the pairs listed in a common cell:
+ * O(n + k) for outlines, whose edges are short against the piece; all pairs
+ * only in degenerate inputs (every segment spanning the piece). Segments
+ * sharing a vertex are neighbours, not crossings.
  *
  * Seams: polyline lengths in 3D and of both sides in 2D, and the RMS
  * residual after the best reflection (a 2D Procrustes fit with det = -1,
@@ -38,7 +39,7 @@
  * 3D), and the RMS residual of leg b mirrored onto leg a about the best
  * axis through the tip (closed form, the axis that minimises that residual).
  *
- * Cost O(F log F) (connectivity, sorting for percentiles and the sweep).
+ * Cost O(F log F) (connectivity, sorting for percentiles; the crossing grid is O(F) for outlines).
  * Failure: PZ_ERR_USAGE for a pose that does not exist, PZ_ERR_NOMEM.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -151,12 +152,6 @@ typedef struct segment {
     int32_t a, b;            /* vertex ids, to skip neighbours */
 } segment;
 
-static int compare_segments(const void *l, const void *r)
-{
-    double a = ((const segment *)l)->x0, b = ((const segment *)r)->x0;
-    return (a > b) - (a < b);
-}
-
 static double orient(double ax, double ay, double bx, double by, double cx, double cy)
 {
     return (bx - ax) * (cy - ay) - (by - ay) * (cx - ax);
@@ -182,30 +177,134 @@ static int segments_meet(const segment *s, const segment *t)
            (d4 == 0 && on_segment(s->x0, s->y0, s->x1, s->y1, t->x1, t->y1));
 }
 
-/* Pairs of non-neighbouring segments that meet; -1 when out of memory. Sorts `segments`. */
-static int32_t count_crossings(segment *segments, int32_t count)
+/* A uniform grid over the segments' bounding box, about one cell per
+ * segment; each segment is listed in every cell its bounding box covers
+ * (CSR: cell_start, entries). */
+typedef struct segment_grid {
+    double x_min, y_min, cell;
+    int32_t nx, ny;
+    int32_t *cell_start, *entries;
+} segment_grid;
+
+static int32_t grid_cell_index(const segment_grid *g, double value, double origin, int32_t cells)
 {
-    qsort(segments, (size_t)count, sizeof *segments, compare_segments);
-    int32_t *active = malloc((size_t)count * sizeof(int32_t) + 1);
-    if (!active)
-        return -1;
-    int32_t active_count = 0, crossings = 0;
-    for (int32_t i = 0; i < count; ++i) {
-        const segment *s = &segments[i];
-        int32_t kept = 0;
-        for (int32_t k = 0; k < active_count; ++k) {
-            const segment *t = &segments[active[k]];
-            if (t->x1 < s->x0)
-                continue; /* closed to the left of everything still to come */
-            active[kept++] = active[k];
-            if (t->yhi < s->ylo || s->yhi < t->ylo || t->a == s->a || t->a == s->b || t->b == s->a || t->b == s->b)
-                continue;
-            crossings += segments_meet(s, t);
+    double k = floor((value - origin) / g->cell);
+    return !(k > 0) ? 0 : k >= cells ? cells - 1 : (int32_t)k; /* NaN: cell 0 */
+}
+
+/* Runs `body` with `cell` set to every cell the bounding box of segment s covers. */
+#define FOR_CELLS(g, s, body)                                                                  \
+    for (int32_t cy = grid_cell_index(g, (s)->ylo, (g)->y_min, (g)->ny),                      \
+                 cy_end = grid_cell_index(g, (s)->yhi, (g)->y_min, (g)->ny);                  \
+         cy <= cy_end; ++cy)                                                                   \
+        for (int32_t cx = grid_cell_index(g, (s)->x0, (g)->x_min, (g)->nx),                   \
+                     cx_end = grid_cell_index(g, (s)->x1, (g)->x_min, (g)->nx);               \
+             cx <= cx_end; ++cx) {                                                             \
+            int32_t cell = cy * (g)->nx + cx;                                                  \
+            body                                                                               \
         }
-        active_count = kept;
-        active[active_count++] = i;
+
+/* Builds the grid; 0 when out of memory. */
+static int grid_build(segment_grid *g, const segment *segments, int32_t count)
+{
+    double x_min = INFINITY, x_max = -INFINITY, y_min = INFINITY, y_max = -INFINITY;
+    for (int32_t i = 0; i < count; ++i) {
+        x_min = fmin(x_min, segments[i].x0);
+        x_max = fmax(x_max, segments[i].x1);
+        y_min = fmin(y_min, segments[i].ylo);
+        y_max = fmax(y_max, segments[i].yhi);
     }
-    free(active);
+    double width = fmax(x_max - x_min, 0), height = fmax(y_max - y_min, 0);
+    /* About `count` square cells; O(count) whatever the shape (no side above 4 count cells). */
+    double cell = sqrt(fmax(width * height, 0) / count);
+    if (!(cell > 0) || !isfinite(cell))
+        cell = fmax(fmax(width, height) / count, 1e-300);
+    cell = fmax(cell, fmax(width, height) / (4.0 * count));
+    g->x_min = x_min;
+    g->y_min = y_min;
+    g->cell = cell;
+    if (!(width < INFINITY && height < INFINITY)) { /* infinite coordinates: one cell, every pair tested */
+        g->cell = 1;
+        g->nx = g->ny = 1;
+    } else {
+        g->nx = (int32_t)fmin(width / cell + 1, 4.0 * count);
+        g->ny = (int32_t)fmin(height / cell + 1, 4.0 * count);
+        if ((int64_t)g->nx * g->ny > 4 * (int64_t)count + 4) { /* rounding: keep the budget */
+            g->cell *= 2;
+            g->nx = (int32_t)(width / g->cell + 1);
+            g->ny = (int32_t)(height / g->cell + 1);
+        }
+    }
+    size_t cells = (size_t)g->nx * (size_t)g->ny;
+    g->cell_start = calloc(cells + 1, sizeof(int32_t));
+    g->entries = NULL;
+    if (!g->cell_start)
+        return 0;
+    int64_t total = 0;
+    for (int32_t i = 0; i < count; ++i)
+        FOR_CELLS(g, &segments[i], { ++g->cell_start[cell + 1]; ++total; })
+    if (total > INT32_MAX)
+        return 0;
+    for (size_t c = 0; c < cells; ++c)
+        g->cell_start[c + 1] += g->cell_start[c];
+    int32_t *fill = malloc(cells * sizeof(int32_t) + 1);
+    g->entries = malloc((size_t)total * sizeof(int32_t) + 1);
+    if (!fill || !g->entries) {
+        free(fill);
+        return 0;
+    }
+    memcpy(fill, g->cell_start, cells * sizeof(int32_t));
+    for (int32_t i = 0; i < count; ++i)
+        FOR_CELLS(g, &segments[i], { g->entries[fill[cell]++] = i; })
+    free(fill);
+    return 1;
+}
+
+/*
+ * Pairs of non-neighbouring segments that meet; -1 when out of memory. When
+ * `marked` is given, marked[v] = 1 for both end vertices of every segment
+ * in such a pair. Each pair whose bounding boxes overlap is tested in the
+ * one grid cell holding the lower-left corner of their boxes' intersection,
+ * so it is counted once. Cost: O(n) to build, plus, per cell, the pairs of
+ * segments listed in it: O(n + b) with b the pairs whose bounding boxes
+ * share a cell, for outlines (edges short against the piece, about one per
+ * cell); a crowd of segments in one cell, or segments spanning many cells,
+ * costs more, up to all pairs in a degenerate case.
+ */
+static int32_t count_crossings(const segment *segments, int32_t count, uint8_t *marked)
+{
+    if (count < 2)
+        return 0;
+    segment_grid grid;
+    if (!grid_build(&grid, segments, count)) {
+        free(grid.cell_start);
+        free(grid.entries);
+        return -1;
+    }
+    int32_t crossings = 0, cells = grid.nx * grid.ny;
+    for (int32_t c = 0; c < cells; ++c) {
+        int32_t first = grid.cell_start[c], last = grid.cell_start[c + 1];
+        for (int32_t i = first; i < last; ++i) {
+            const segment *s = &segments[grid.entries[i]];
+            for (int32_t j = i + 1; j < last; ++j) {
+                const segment *t = &segments[grid.entries[j]];
+                if (t->x1 < s->x0 || s->x1 < t->x0 || t->yhi < s->ylo || s->yhi < t->ylo)
+                    continue;
+                if (t->a == s->a || t->a == s->b || t->b == s->a || t->b == s->b)
+                    continue;
+                /* The pair's own cell: where the intersection of the boxes starts. */
+                int32_t cx = grid_cell_index(&grid, fmax(s->x0, t->x0), grid.x_min, grid.nx);
+                int32_t cy = grid_cell_index(&grid, fmax(s->ylo, t->ylo), grid.y_min, grid.ny);
+                if (cy * grid.nx + cx != c || !segments_meet(s, t))
+                    continue;
+                ++crossings;
+                if (marked)
+                    marked[s->a] = marked[s->b] = marked[t->a] = marked[t->b] = 1;
+            }
+        }
+    }
+    free(grid.cell_start);
+    free(grid.entries);
     return crossings;
 }
 
@@ -355,7 +454,9 @@ typedef struct face_figures {
 static void measure_faces(const pz_mesh *mesh, const double *positions, const double *uv, const pz_fabric *fabric,
                           pz_metrics *m, face_figures *ff)
 {
-#pragma omp parallel for schedule(static)
+    /* Below a few thousand faces a team costs more than the loop (fork/join,
+     * and libgomp's workers spinning after it on a busy machine). */
+#pragma omp parallel for schedule(static) if (mesh->face_count >= 8192)
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         double p3[3][3], p2[3][2], du[3], dv[3];
         const int32_t *corner = mesh->faces + 3 * f;
@@ -420,12 +521,17 @@ static segment outline_segment(const double *uv, int32_t a, int32_t b)
 
 int32_t pz_metrics_outline_crossings(const int32_t *edges, int32_t count, const double *uv)
 {
+    return pz_metrics_outline_crossings_marked(edges, count, uv, NULL);
+}
+
+int32_t pz_metrics_outline_crossings_marked(const int32_t *edges, int32_t count, const double *uv, uint8_t *marked)
+{
     segment *segments = malloc((size_t)count * sizeof(segment) + 1);
     if (!segments)
         return -1;
     for (int32_t i = 0; i < count; ++i)
         segments[i] = outline_segment(uv, edges[2 * i], edges[2 * i + 1]);
-    int32_t crossings = count_crossings(segments, count);
+    int32_t crossings = count_crossings(segments, count, marked);
     free(segments);
     return crossings;
 }
@@ -450,7 +556,7 @@ static int count_panel_crossings(const pz_pattern *pattern, const pz_topology *t
         segments[fill[pattern->face_panel[pz_he_face(h)]]++] = outline_segment(uv, pz_he_from(t, h), pz_he_to(t, h));
     }
     for (int32_t p = 0; ok && p < pattern->panel_count; ++p) {
-        int32_t crossings = count_crossings(segments + offsets[p], offsets[p + 1] - offsets[p]);
+        int32_t crossings = count_crossings(segments + offsets[p], offsets[p + 1] - offsets[p], NULL);
         if (crossings < 0)
             ok = 0;
         else

@@ -245,13 +245,29 @@ pz_status pz_feature_curves_snap(const pz_pattern *pattern, const pz_feature_pol
                                  int32_t polyline_count, double tolerance_mm, pz_feature_curves **out,
                                  pz_ctx *ctx);
 
+/**
+ * pz_feature_curves_snap, but a polyline that cannot be snapped (a point off the mesh, a curve across
+ * panels, a curve that snaps to one vertex) is left out instead of failing the call: *out holds the
+ * others in order (possibly none); skipped (polyline_count flags, may be NULL) gets 1 for each one
+ * left out, and on_skip (may be NULL) is called with its index and the one-line problem. Only usage
+ * and out-of-memory errors fail (then *out = NULL). *out is freed with pz_feature_curves_free.
+ */
+pz_status pz_feature_curves_snap_lenient(const pz_pattern *pattern, const pz_feature_polyline *polylines,
+                                         int32_t polyline_count, double tolerance_mm, pz_feature_curves **out,
+                                         uint8_t *skipped,
+                                         void (*on_skip)(void *user, int32_t curve, const char *problem),
+                                         void *user, pz_ctx *ctx);
+
 typedef struct pz_wirewarp_options {
     int scheme;              /* 0 global (Sec. 4, default), 1 progressive (Sec. 3) */
-    int interior;            /* 0 cotangent Laplacian (default), 1 the paper's 1/length weights (Eq. 11) */
+    int interior;            /* 0 cotangent Laplacian (default), 1 the paper's 1/length weights (Eq. 11),
+                                2 those solved by the paper's relaxed Gauss-Seidel (Eq. 12; else the fallback) */
     int max_iterations;      /* Newton iterations per solve; 0 = 100 */
     int grain_given;         /* 1: use `grain`; 0 = +z. Each piece is turned so the grain runs along +v */
     double grain[3];
 } pz_wirewarp_options;
+
+#define PZ_WIREWARP_RELAXED_MAX 16  /* relaxed key curves listed by index in pz_wirewarp_result */
 
 typedef struct pz_wirewarp_result {
     int32_t wire_patch_count, wire_node_count, wire_edge_count;
@@ -271,6 +287,11 @@ typedef struct pz_wirewarp_result {
     int32_t untangled_vertices;  /* interior vertex moves that unflipped faces (wires never move) */
     int32_t trimmed_feature_edges; /* edges given up at the free ends of dangling feature curves because the
                                     interior folded there (best_effort is then set; docs/wirewarp.md) */
+    int32_t relaxed_key_curve_count; /* key curves whose angles were relaxed: with them all fixed the wire-patches
+                                    could not close (incompatible keys, Figs. 13-14), so their Eq. 1 angles became
+                                    least-squares targets; wire lengths stay exact; best_effort is then set */
+    int32_t relaxed_key_curves[PZ_WIREWARP_RELAXED_MAX]; /* the first of them: indices into `features` */
+    double relaxed_key_angle;    /* largest change of a relaxed key curve's angle from its fixed value (rad) */
 } pz_wirewarp_result;
 
 /**
@@ -363,11 +384,17 @@ void pz_metrics_free(pz_metrics **metrics);
 /**
  * Pairs of outline edges that meet (cross, touch or overlap) without sharing a
  * vertex: the boundary self-intersections of pz_metrics_compute for one set of
- * edges. edges: count x 2 vertex ids into uv (vertex_count x 2). A sweep over
- * the edges sorted by x, O(n log n) plus the pairs whose x-ranges overlap.
- * Returns -1 when out of memory.
+ * edges. edges: count x 2 vertex ids into uv (vertex_count x 2). A uniform
+ * grid of about one cell per edge: O(n + b), b the pairs of edges whose
+ * bounding boxes share a cell (docs/metrics.md). Returns -1 when out of memory.
  */
 int32_t pz_metrics_outline_crossings(const int32_t *edges, int32_t count, const double *uv);
+/**
+ * pz_metrics_outline_crossings that also sets marked[v] = 1 for both end
+ * vertices of every edge in a meeting pair (marked: caller-owned, one byte
+ * per vertex of uv, not cleared here; NULL: count only).
+ */
+int32_t pz_metrics_outline_crossings_marked(const int32_t *edges, int32_t count, const double *uv, uint8_t *marked);
 
 /**
  * Per-triangle strain of one triangle: p3[3][3] garment positions, p2[3][2]
@@ -408,7 +435,7 @@ typedef enum pz_springmass_stop {
 } pz_springmass_stop;
 
 typedef enum pz_seam_kind {
-    PZ_SEAM_KIND_NONE = 0,     /* sides neither splay nor overlap measurably */
+    PZ_SEAM_KIND_NONE = 0,     /* sides neither splay nor overlap measurably (|opening| <= 0.1% of the area) */
     PZ_SEAM_KIND_DART = 1,     /* sides splay apart (elliptic: close with a dart) */
     PZ_SEAM_KIND_GUSSET = 2    /* sides overlap (hyperbolic: insert a gusset) */
 } pz_seam_kind;

@@ -61,8 +61,10 @@
  * global step is first shortened, per panel, to 0.8 of the way to the first
  * face that would flip (flip_free_step), then aligned and evaluated; it is
  * kept when the total energy did not increase and no panel has more
- * collapsed or mirrored faces than the LSCM start had; otherwise the panels
- * that got worse take half their step (all panels when none did on its own:
+ * collapsed or mirrored faces or outline crossings than the LSCM start had;
+ * otherwise a panel whose energy fell but whose outline now meets itself
+ * holds back only around the contact (damp_crossings), and the panels that
+ * got worse take half their step (all panels when none did on its own:
  * seams couple them), at most MAX_STEP_HALVINGS times, after which the
  * previous iterate is kept and the iteration stops. The returned energy is
  * therefore never above the start's, and the energies reported through
@@ -87,6 +89,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#define _DEFAULT_SOURCE /* getloadavg, sysconf */
 #include "param.h"
 
 #include <cholmod.h>
@@ -94,6 +97,7 @@
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* Bounds of a factorization's cost in PCG steps (see pcg_solve). */
 #define PCG_MIN_STEPS 4
@@ -1644,6 +1648,8 @@ typedef struct step_control {
     double *step;                   /* per panel: fraction of the global step taken */
     double *energy, *trial_energy;  /* per panel, accepted and trial */
     int32_t *flipped, *trial_flipped, *allowed_flipped; /* allowed: as many as the start had */
+    double *vertex_step;            /* vertex_count: a vertex's own factor on top of its panel's step */
+    uint8_t *near;                  /* vertex_count, scratch of damp_crossings: 0 outside its rings */
 } step_control;
 
 static void step_control_free(step_control *control)
@@ -1656,6 +1662,8 @@ static void step_control_free(step_control *control)
     free(control->flipped);
     free(control->trial_flipped);
     free(control->allowed_flipped);
+    free(control->vertex_step);
+    free(control->near);
 }
 
 static int step_control_init(step_control *control, const pz_pattern *pattern)
@@ -1669,11 +1677,14 @@ static int step_control_init(step_control *control, const pz_pattern *pattern)
     control->flipped = malloc(np * sizeof(int32_t) + 1);
     control->trial_flipped = malloc(np * sizeof(int32_t) + 1);
     control->allowed_flipped = malloc(np * sizeof(int32_t) + 1);
+    control->vertex_step = malloc(nv * sizeof(double) + 1);
+    control->near = calloc(nv + 1, 1);
     return control->previous_uv && control->full_uv && control->step && control->energy && control->trial_energy &&
-           control->flipped && control->trial_flipped && control->allowed_flipped;
+           control->flipped && control->trial_flipped && control->allowed_flipped && control->vertex_step &&
+           control->near;
 }
 
-/* uv = previous + step[p] (full - previous) on every panel p. */
+/* uv = previous + step[p] vertex_step[v] (full - previous) on every vertex v of every panel p. */
 static void blend(const textile_state *state, const step_control *control, double *uv)
 {
     const pz_pattern *pattern = state->pattern;
@@ -1684,8 +1695,10 @@ static void blend(const textile_state *state, const step_control *control, doubl
 #pragma omp parallel for schedule(static) num_threads(state->threads) if (state->within_panel)
         for (int32_t l = 0; l < system->vertex_count; ++l)
             for (int k = 0; k < 2; ++k) {
-                size_t i = 2 * (size_t)system->vertices[l] + k;
-                uv[i] = control->previous_uv[i] + t * (control->full_uv[i] - control->previous_uv[i]);
+                int32_t v = system->vertices[l];
+                size_t i = 2 * (size_t)v + k;
+                uv[i] = control->previous_uv[i] + t * control->vertex_step[v] *
+                                                      (control->full_uv[i] - control->previous_uv[i]);
             }
     }
 }
@@ -1737,6 +1750,54 @@ static double flip_free_step(const textile_state *state, int32_t panel, const do
     return best;
 }
 
+/* Rings of faces around an outline crossing over which a vertex's own step
+ * ramps back from 0 to 1 (damp_crossings). Measured on the jumpsuit front
+ * (3 poses): 1 ring ended at energy 1288 after 20 steps, 3 rings 1292, 6
+ * rings 1185, 10 rings 1280 (the trajectories differ; 6 kept). */
+#define CROSSING_RINGS 6
+
+/*
+ * When panel p's trial iterate uv lowered its energy but made its outline
+ * meet itself: the vertices of the meeting outline edges keep their
+ * previous positions (own step 0) and those k rings of faces away take
+ * k / (CROSSING_RINGS + 1) of the step, so the next trial holds back only
+ * where the outline closes up instead of the whole panel. The steps of one
+ * line search only shrink (a vertex frozen once stays frozen until the next
+ * global step). Why: two parts of the jumpsuit front's outline lie about
+ * 1.5 mm apart in 3D (vertices 172-173 and 1164-1167) and the flattening
+ * closes that gap; halving the whole panel's step, as for an energy rise,
+ * left every later step a backtracked fraction and the iteration stalled
+ * after 7-8 steps. Returns 1 when the panel has a crossing (and its steps
+ * were shortened), 0 when it has none (its defects are faces).
+ */
+static int damp_crossings(const textile_state *state, step_control *control, int32_t p, const double *uv)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    const panel_system *system = &state->panels[p];
+    int32_t outline = state->outline_offsets[p], edges = state->outline_offsets[p + 1] - outline;
+    uint8_t *near = control->near;
+    int32_t crossings =
+        pz_metrics_outline_crossings_marked(state->outline_edges + 2 * (size_t)outline, edges, uv, near);
+    if (crossings > 0) {
+        int32_t first = state->offsets[p], faces = state->offsets[p + 1] - first;
+        for (int ring = 1; ring <= CROSSING_RINGS; ++ring)
+            for (int32_t i = first; i < first + faces; ++i) {
+                const int32_t *corner = mesh->faces + 3 * (size_t)state->order[i];
+                if (near[corner[0]] == ring || near[corner[1]] == ring || near[corner[2]] == ring)
+                    for (int c = 0; c < 3; ++c)
+                        if (!near[corner[c]])
+                            near[corner[c]] = (uint8_t)(ring + 1);
+            }
+    }
+    for (int32_t l = 0; l < system->vertex_count; ++l) {
+        int32_t v = system->vertices[l];
+        if (near[v] && crossings > 0)
+            control->vertex_step[v] = fmin(control->vertex_step[v], (near[v] - 1) / (CROSSING_RINGS + 1.0));
+        near[v] = 0;
+    }
+    return crossings > 0;
+}
+
 /*
  * Backtracking after a global step (uv holds its result; control->previous_uv
  * the accepted iterate, of energy `energy`, already evaluated into
@@ -1757,6 +1818,8 @@ static double line_search(textile_state *state, step_control *control, double en
     size_t bytes = (size_t)pattern->mesh->vertex_count * 2 * sizeof(double);
     int32_t np = pattern->panel_count;
     memcpy(control->full_uv, uv, bytes);
+    for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v)
+        control->vertex_step[v] = 1;
     *bounded = 0;
     for (int32_t p = 0; p < np; ++p) {
         double step = FLIP_MARGIN * flip_free_step(state, p, control->previous_uv, control->full_uv);
@@ -1792,9 +1855,13 @@ static double line_search(textile_state *state, step_control *control, double en
         }
         int blamed = 0;
         for (int32_t p = 0; p < np; ++p) {
-            int worse = control->trial_flipped[p] > control->allowed_flipped[p] ||
-                        !(control->trial_energy[p] <= control->energy[p] + ENERGY_SLACK * energy);
-            if (worse && control->step[p] > 0) {
+            int more_defects = control->trial_flipped[p] > control->allowed_flipped[p];
+            int higher = !(control->trial_energy[p] <= control->energy[p] + ENERGY_SLACK * energy);
+            if (more_defects && !higher && damp_crossings(state, control, p, uv)) {
+                blamed = 1;
+                continue;
+            }
+            if ((more_defects || higher) && control->step[p] > 0) {
                 control->step[p] *= 0.5;
                 blamed = 1;
             }
@@ -1997,6 +2064,30 @@ static pz_status iterate(textile_state *state, step_control *control, const pz_t
     return PZ_OK;
 }
 
+/*
+ * The team size when the caller leaves it to us (options->threads == 0):
+ * OpenMP's maximum, but one thread when the machine has no core to spare.
+ * libgomp's default wait is active, so a thread descheduled by other work
+ * leaves its partner spinning at every barrier: at 200K faces and load 3.4
+ * on 2 cores, 66-184 ms per iteration with two threads against 79-109 ms
+ * with one (docs/param.md, "Threads"). "No core to spare": the 1-minute load
+ * average, less the one thread this process runs itself, leaves less than
+ * one more core. The result does not depend on the team size (SUM_BLOCKS),
+ * so this only changes the time.
+ */
+static int default_threads(void)
+{
+    int threads = omp_get_max_threads();
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    double load[1];
+    if (threads > 1 && cores > 0 && getloadavg(load, 1) == 1) {
+        double spare = (double)cores - fmax(load[0] - 1.0, 0.0);
+        if (spare < (double)threads)
+            threads = spare >= 2.0 ? (int)spare : 1;
+    }
+    return threads;
+}
+
 static void read_options(textile_state *state, const pz_textile_options *options, int *iterations, double *tolerance)
 {
     pz_textile_options defaults;
@@ -2018,7 +2109,7 @@ static void read_options(textile_state *state, const pz_textile_options *options
     }
     double up[3] = {0, 0, 1};
     memcpy(state->grain, options->grain_given ? options->grain : up, sizeof state->grain);
-    state->threads = options->threads > 0 ? options->threads : omp_get_max_threads();
+    state->threads = options->threads > 0 ? options->threads : default_threads();
     state->parallel = state->threads > 1 && state->pattern->mesh->face_count >=
                                                 (options->threads > 0 ? PARALLEL_MIN_FACES_ASKED : PARALLEL_MIN_FACES);
     /* A parallel loop over one panel leaves every thread but one spinning at

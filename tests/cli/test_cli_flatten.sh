@@ -129,6 +129,24 @@ report_checks "flatten hemi.obj" hemi \
     "parameters kept" "d['parameters']['iterations'] == 30 and d['parameters']['grain'] == [0, 1, 0] and d['parameters']['fabric']['k_su_N_per_mm'] == 1" \
     "grain given" "d['parameters']['grain_source'] == 'given'"
 
+# ------------------------------------------------------------------ the shared hemisphere (boundary-first-flattening's)
+if [ -n "$DATA" ] && [ -f "$DATA/surfaces/hemisphere.obj" ]; then
+    run flatten "$DATA/surfaces/hemisphere.obj" -o shared-hemi --quiet
+    expect_ok "flatten surfaces/hemisphere.obj"
+    report_checks "flatten surfaces/hemisphere.obj" shared-hemi \
+        "injective" "d['summary']['injective'] is True and d['panels'][0]['flipped_triangles'] == 0 and d['panels'][0]['boundary_self_intersections'] == 0" \
+        "strained, as a sphere must be" "0.001 < d['summary']['max_abs_strain'] < 1"
+    [ -f shared-hemi/report.json ] && python3 -c "
+import json, sys
+d = json.load(open(sys.argv[1]))
+p = d['panels'][0]
+print('surfaces/hemisphere.obj: %d faces, max |strain| %.4f (warp p95 %.4f, weft p95 %.4f), injective %s' % (
+    p['faces'], d['summary']['max_abs_strain'], p['strain_warp']['p95'], p['strain_weft']['p95'], d['summary']['injective']))
+" shared-hemi/report.json
+else
+    echo "SKIPPED: the shared hemisphere (no \$PZ_SHARED_DATA/surfaces)"
+fi
+
 # ------------------------------------------------------------------ panels from a file, OBJ groups, poses
 python3 -c "
 faces = sum(1 for line in open('tube.obj') if line.startswith('f '))

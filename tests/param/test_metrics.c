@@ -3,8 +3,10 @@
  * hand: strains and shear of a stretched and of a sheared triangle; the
  * orthotropic energy (mccartney2005 Eqs. 8-9), ARAP, E_len, E_ang, E_S and
  * E_C of one known triangle; flipped triangles; boundary self-intersections
- * (a bow-tie found, a convex fan not, and the sweep agreeing with a
- * brute-force count on random polygons); seam lengths and the reflection
+ * (a bow-tie found, a convex fan not, the grid agreeing with a
+ * brute-force count on random polygons, a pulled 20,001-edge circle with
+ * exactly its 2 crossing pairs and their 5 vertices marked, touching and
+ * collinear overlap counted); seam lengths and the reflection
  * residual of an exactly mirrored and of a stretched pair; dart leg lengths
  * and symmetry; measuring against an extra pose; a pose that does not exist.
  *
@@ -210,7 +212,7 @@ static void test_flips_and_crossings(void)
     free(uv);
     pz_pattern_free(&pattern);
 
-    /* Random rims: the sweep finds exactly the crossings a brute-force count finds. */
+    /* Random rims: the grid finds exactly the crossings a brute-force count finds. */
     srand(7);
     for (int trial = 0; trial < 5; ++trial) {
         int n = 40 + 20 * trial;
@@ -225,13 +227,60 @@ static void test_flips_and_crossings(void)
             rim[i] = 1 + i;
         REQUIRE_OK(pz_metrics_compute(pattern, uv, 0, NULL, &m, &ctx), ctx);
         int expected = brute_force_crossings(uv, rim, n);
-        CHECK(m->panels[0].boundary_self_intersections == expected && expected > 0, "n %d: sweep %d, brute force %d", n,
+        CHECK(m->panels[0].boundary_self_intersections == expected && expected > 0, "n %d: grid %d, brute force %d", n,
               (int)m->panels[0].boundary_self_intersections, expected);
         pz_metrics_free(&m);
         free(rim);
         free(uv);
         pz_pattern_free(&pattern);
     }
+}
+
+/*
+ * pz_metrics_outline_crossings_marked on a big outline: a circle of 20,001
+ * edges (the grid's common case: short edges, one per cell) with vertex 0
+ * pulled across to (-150, 0). Its two edges each cross the one circle edge
+ * that straddles 180 degrees (20,001 is odd: no vertex there), so 2 pairs,
+ * and exactly the 5 vertices of those 3 edges are marked. Touching counts:
+ * a vertex of one edge lying on another edge, and collinear overlap.
+ */
+static void test_outline_crossings(void)
+{
+    const int32_t n = 20001;
+    double *uv = malloc((size_t)n * 2 * sizeof(double));
+    int32_t *edges = malloc((size_t)n * 2 * sizeof(int32_t));
+    uint8_t *marked = calloc((size_t)n, 1);
+    REQUIRE(uv && edges && marked, "out of memory");
+    for (int32_t i = 0; i < n; ++i) {
+        uv[2 * i] = 100 * cos(2 * TEST_PI * i / n);
+        uv[2 * i + 1] = 100 * sin(2 * TEST_PI * i / n);
+        edges[2 * i] = i;
+        edges[2 * i + 1] = (i + 1) % n;
+    }
+    CHECK(pz_metrics_outline_crossings(edges, n, uv) == 0, "a circle crosses itself");
+    uv[0] = -150;
+    uv[1] = 0;
+    int32_t crossings = pz_metrics_outline_crossings_marked(edges, n, uv, marked);
+    int32_t straddle = n / 2; /* the edge straddle -> straddle + 1 crosses 180 degrees */
+    int marked_count = 0, marked_right = marked[n - 1] && marked[0] && marked[1] && marked[straddle] &&
+                                          marked[straddle + 1];
+    for (int32_t i = 0; i < n; ++i)
+        marked_count += marked[i];
+    CHECK(crossings == 2 && marked_count == 5 && marked_right, "pulled circle: %d crossings, %d marked (%s)", crossings,
+          marked_count, marked_right ? "the right ones" : "not the right ones");
+    free(uv);
+    free(edges);
+    free(marked);
+
+    /* T-touch: the end of one segment on the middle of another; and two
+     * collinear overlapping segments. Each is one meeting pair. */
+    double touch[8] = {0, 0, 10, 0, 5, 0, 5, 10};
+    int32_t pair[4] = {0, 1, 2, 3};
+    CHECK(pz_metrics_outline_crossings(pair, 2, touch) == 1, "T-touch not counted");
+    double overlap[8] = {0, 0, 10, 0, 5, 0, 15, 0};
+    CHECK(pz_metrics_outline_crossings(pair, 2, overlap) == 1, "collinear overlap not counted");
+    double apart[8] = {0, 0, 10, 0, 0, 1, 10, 1};
+    CHECK(pz_metrics_outline_crossings(pair, 2, apart) == 0, "parallel segments counted");
 }
 
 /* Two panels of a flat 2 x 4 grid (x 0..2, y 0..4) split at x = 1, the shared column bent. */
@@ -380,6 +429,7 @@ int main(void)
     test_triangle_strain();
     test_panel_figures();
     test_flips_and_crossings();
+    test_outline_crossings();
     test_seams();
     test_darts();
     test_poses();
