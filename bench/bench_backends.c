@@ -19,9 +19,14 @@
  * 20K faces or when the first run took over a second), metrics not
  * included. The load average is printed first. A back-end is one table entry: a name, a
  * function flattening a whole pattern and a face limit (spring-mass with
- * full relaxation, O(faces^2), is skipped above FULL_RELAX_MAX_FACES).
+ * full relaxation, O(faces^2), is skipped above FULL_RELAX_MAX_FACES, the
+ * orthotropic one above ORTHO_MAX_FACES).
  * Back-ends: WireWarping global and progressive, LSCM, textile, spring-mass
- * with heap (IISERM) and full (wang2002) relaxation. Usage: bench_backends [DATA_DIR]
+ * with heap (IISERM) and full (wang2002) relaxation, and orthotropic
+ * spring-mass (mccartney2005's energy, heap relaxation). Two more rows run
+ * the WireWarping schemes on the 2K quarter-sphere with its meridian as a
+ * feature curve (accessory, then key), where the schemes differ (Table 1).
+ * Usage: bench_backends [DATA_DIR]
  * (default $PZ_SHARED_DATA, then ../shared/data).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -44,62 +49,87 @@ static double cpu_seconds(void)
     return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
 }
 
-typedef pz_status (*backend_fn)(const pz_pattern *pattern, double *uv, pz_ctx *ctx);
+/* Flattens a whole pattern; features (may be NULL) are WireWarping's feature curves, ignored by the others. */
+typedef pz_status (*backend_fn)(const pz_pattern *pattern, const pz_feature_curves *features, double *uv,
+                                pz_ctx *ctx);
 
-static pz_status run_wirewarp_global(const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+static pz_status run_wirewarp_global(const pz_pattern *pattern, const pz_feature_curves *features, double *uv,
+                                     pz_ctx *ctx)
 {
     pz_wirewarp_options options = {.scheme = 0};
-    return pz_param_wirewarp(pattern, &options, NULL, uv, NULL, ctx);
+    return pz_param_wirewarp(pattern, &options, features, uv, NULL, ctx);
 }
 
-static pz_status run_wirewarp_progressive(const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+static pz_status run_wirewarp_progressive(const pz_pattern *pattern, const pz_feature_curves *features, double *uv,
+                                          pz_ctx *ctx)
 {
     pz_wirewarp_options options = {.scheme = 1};
-    return pz_param_wirewarp(pattern, &options, NULL, uv, NULL, ctx);
+    return pz_param_wirewarp(pattern, &options, features, uv, NULL, ctx);
 }
 
-static pz_status run_lscm(const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+static pz_status run_lscm(const pz_pattern *pattern, const pz_feature_curves *features, double *uv, pz_ctx *ctx)
 {
+    (void)features;
     return pz_param_lscm_pattern(pattern, NULL, uv, ctx);
 }
 
-static pz_status run_textile(const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+static pz_status run_textile(const pz_pattern *pattern, const pz_feature_curves *features, double *uv, pz_ctx *ctx)
 {
+    (void)features;
     return pz_param_textile(pattern, NULL, uv, NULL, ctx);
 }
 
-static pz_status run_springmass_heap(const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+static pz_status run_springmass_heap(const pz_pattern *pattern, const pz_feature_curves *features, double *uv,
+                                     pz_ctx *ctx)
 {
+    (void)features;
     return pz_param_springmass(pattern, NULL, uv, NULL, ctx);
 }
 
-static pz_status run_springmass_full(const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+static pz_status run_springmass_full(const pz_pattern *pattern, const pz_feature_curves *features, double *uv,
+                                     pz_ctx *ctx)
 {
+    (void)features;
     pz_springmass_options options = {.relax = 1};
+    return pz_param_springmass(pattern, &options, uv, NULL, ctx);
+}
+
+/* McCartney's warp/weft/shear energy with the paper's fabric constants, grain +z, heap relaxation. */
+static pz_status run_springmass_ortho(const pz_pattern *pattern, const pz_feature_curves *features, double *uv,
+                                      pz_ctx *ctx)
+{
+    (void)features;
+    pz_springmass_options options = {.orthotropic = 1};
     return pz_param_springmass(pattern, &options, uv, NULL, ctx);
 }
 
 /* Full relaxation grows as faces^2 (38 s at 20K faces; on the tangled
  * 8K-face max-planck every triangle runs its 50 sweeps): skipped above this. */
 #define FULL_RELAX_MAX_FACES 5000
+/* Orthotropic spring-mass relaxes with ISERM's node sweeps only (docs/springmass.md): 11 s of CPU at 20K
+ * faces, 12 s on the 34K face scan, where it ends on its LSCM second try; skipped above this. */
+#define ORTHO_MAX_FACES 20000
 /* A back-end whose first run takes longer than this is run once. */
 #define REPEAT_BELOW_MS 1000
 
-/* The back-ends compared: add a row here (max_faces 0: no limit). */
+/* The back-ends compared: add a row here (max_faces 0: no limit; features 1: takes feature curves, the only
+ * ones run on a mesh with curves). */
 static const struct {
     const char *name;
     backend_fn run;
     int32_t max_faces;
+    int features;
 } backends[] = {
-    {"wirewarp-global", run_wirewarp_global, 0},
-    {"wirewarp-progressive", run_wirewarp_progressive, 0},
-    {"lscm", run_lscm, 0},
-    {"textile", run_textile, 0},
-    {"springmass-heap", run_springmass_heap, 0},
-    {"springmass-full", run_springmass_full, FULL_RELAX_MAX_FACES},
+    {"wirewarp-global", run_wirewarp_global, 0, 1},
+    {"wirewarp-progressive", run_wirewarp_progressive, 0, 1},
+    {"lscm", run_lscm, 0, 0},
+    {"textile", run_textile, 0, 0},
+    {"springmass-heap", run_springmass_heap, 0, 0},
+    {"springmass-full", run_springmass_full, FULL_RELAX_MAX_FACES, 0},
+    {"springmass-ortho", run_springmass_ortho, ORTHO_MAX_FACES, 0},
 };
 
-static void measure(const char *mesh_name, const pz_pattern *pattern)
+static void measure(const char *mesh_name, const pz_pattern *pattern, const pz_feature_curves *features)
 {
     pz_ctx ctx;
     pz_ctx_init(&ctx);
@@ -109,6 +139,8 @@ static void measure(const char *mesh_name, const pz_pattern *pattern)
     if (!uv)
         return;
     for (size_t b = 0; b < sizeof backends / sizeof backends[0]; ++b) {
+        if (features && !backends[b].features)
+            continue;
         if (backends[b].max_faces > 0 && nf > backends[b].max_faces) {
             printf("bench_backends backend=%s mesh=%s faces=%d skipped=\"more than %d faces\"\n", backends[b].name,
                    mesh_name, nf, backends[b].max_faces);
@@ -119,7 +151,7 @@ static void measure(const char *mesh_name, const pz_pattern *pattern)
         int runs = nf > 20000 ? 1 : 3;
         for (int run = 0; run < runs && !status; ++run) {
             double start = pz_seconds(), cpu_start = cpu_seconds();
-            status = backends[b].run(pattern, uv, &ctx);
+            status = backends[b].run(pattern, features, uv, &ctx);
             double ms = 1e3 * (pz_seconds() - start), cpu_ms = 1e3 * (cpu_seconds() - cpu_start);
             best = ms < best ? ms : best;
             best_cpu = cpu_ms < best_cpu ? cpu_ms : best_cpu;
@@ -259,8 +291,9 @@ done:
     return pattern;
 }
 
-/* One pattern per mesh: `split` 1 cuts into front (y >= 0) and back by face centroid. */
-static void bench_mesh(const char *name, pz_mesh *mesh, int split)
+/* One pattern per mesh: `split` 1 cuts into front (y >= 0) and back by face centroid; `line` (may be NULL)
+ * is snapped into a feature curve for WireWarping (then only the back-ends taking curves run). */
+static void bench_mesh(const char *name, pz_mesh *mesh, int split, const pz_feature_polyline *line)
 {
     pz_ctx ctx;
     pz_ctx_init(&ctx);
@@ -275,10 +308,13 @@ static void bench_mesh(const char *name, pz_mesh *mesh, int split)
             y += mesh->positions[3 * mesh->faces[3 * f + k] + 1];
         face_panel[f] = y < 0;
     }
-    if (pz_pattern_build(mesh, face_panel, NULL, NULL, name, &pattern, &ctx))
+    pz_feature_curves *features = NULL;
+    if (pz_pattern_build(mesh, face_panel, NULL, NULL, name, &pattern, &ctx) ||
+        (line && pz_feature_curves_snap(pattern, line, 1, 0, &features, &ctx)))
         printf("bench_backends mesh=%s faces=%d error=\"%s\"\n", name, mesh->face_count, ctx.error);
     else
-        measure(name, pattern);
+        measure(name, pattern, features);
+    pz_feature_curves_free(&features);
     pz_pattern_free(&pattern);
     free(face_panel);
 }
@@ -310,7 +346,33 @@ int main(int argc, char **argv)
             printf("bench_backends mesh=%s error=\"%s\"\n", generated[i].name, ctx.error);
             continue;
         }
-        bench_mesh(generated[i].name, mesh, generated[i].split);
+        bench_mesh(generated[i].name, mesh, generated[i].split, NULL);
+        pz_mesh_free(&mesh);
+    }
+    /* wang2008 Table 1's point: with a feature curve the global scheme spreads the distortion over both
+     * wire-patches and the progressive one does not. The quarter-sphere's meridian y = 0 from the pole to the
+     * equator (radius 150 mm), as an accessory and as a key curve. */
+    double meridian[21 * 3];
+    for (int i = 0; i <= 20; ++i) {
+        double a = 3.14159265358979323846 / 2 * i / 20;
+        meridian[3 * i] = 150 * sin(a);
+        meridian[3 * i + 1] = 0;
+        meridian[3 * i + 2] = 150 * cos(a);
+    }
+    static const struct {
+        pz_feature_kind kind;
+        const char *name;
+    } curve_rows[] = {{PZ_FEATURE_ACCESSORY, "quarter-sphere+meridian-accessory"},
+                      {PZ_FEATURE_KEY, "quarter-sphere+meridian-key"}};
+    for (size_t i = 0; i < sizeof curve_rows / sizeof curve_rows[0]; ++i) {
+        pz_generate_options options = {.target_faces = 2000};
+        pz_feature_polyline line = {.kind = curve_rows[i].kind, .point_count = 21, .points = meridian};
+        pz_mesh *mesh = NULL;
+        if (pz_generate(PZ_SHAPE_QUARTER_SPHERE, &options, &mesh, &ctx)) {
+            printf("bench_backends mesh=%s error=\"%s\"\n", curve_rows[i].name, ctx.error);
+            continue;
+        }
+        bench_mesh(curve_rows[i].name, mesh, 0, &line);
         pz_mesh_free(&mesh);
     }
     const char *dir = argc > 1 ? argv[1] : getenv("PZ_SHARED_DATA");
@@ -319,7 +381,7 @@ int main(int argc, char **argv)
     pz_mesh *skirt = NULL;
     pz_pattern *pattern = skirt_pattern(dir, &skirt, &ctx);
     if (pattern)
-        measure("skirt-seams", pattern);
+        measure("skirt-seams", pattern, NULL);
     else
         printf("bench_backends mesh=skirt skipped=\"%s\"\n", ctx.error);
     pz_pattern_free(&pattern);
@@ -339,7 +401,7 @@ int main(int argc, char **argv)
         if (pz_mesh_prepare(mesh, path, PZ_REPAIR_NONE, &ctx))
             printf("bench_backends mesh=%s skipped=\"%s\"\n", surfaces[i], ctx.error);
         else
-            bench_mesh(surfaces[i], mesh, 0);
+            bench_mesh(surfaces[i], mesh, 0, NULL);
         pz_mesh_free(&mesh);
     }
     return 0;

@@ -89,6 +89,8 @@ void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const in
 #define WW_EPS 1e-12               /* diagonal regularization of J J^T (rows are O(1)) */
 #define WW_FEASIBLE 1e-12          /* scaled residual below which the constraints hold */
 #define WW_BEST_EFFORT 1e-9        /* scaled residual above which the result is flagged */
+#define WW_KEY_WEIGHT 1e6          /* weight of a relaxed key angle's target against 1 for a free angle */
+#define WW_RELAXED_ANGLE 1e-6      /* rad: a key curve whose angles moved more than this was relaxed */
 
 /* ------------------------------------------------------------------------ */
 /* Edge lookup                                                               */
@@ -391,6 +393,11 @@ typedef struct ww_angles {
     int32_t *host_row;    /* per pattern vertex: compatibility row, -1 (scratch, kept -1) */
     uint8_t *in_set;      /* per patch: in the current system (scratch, kept 0) */
     double *phi, *suffix_sin, *suffix_cos;  /* per node */
+    /* Relaxed key curves (relax_keys): their nodes are free but pulled to their fixed value (target) with
+     * weight WW_KEY_WEIGHT; the columns of J are scaled by 1/sqrt(weight) (scale), see system_step. */
+    double *target;       /* per node: alpha, or the key value for a relaxed key node */
+    double *scale;        /* per node: 1, or 1/sqrt(WW_KEY_WEIGHT) for a relaxed key node */
+    uint8_t *soft;        /* per node: a relaxed key node */
     int max_iterations;
     cholmod_common *cc;
     /* outcomes */
@@ -434,11 +441,12 @@ static void evaluate(ww_angles *a, const int32_t *set, int32_t set_count, int32_
             if (col < 0)
                 continue;
             double *x = values + colp[col];  /* rows 3k, 3k+1, 3k+2 come first in the column (Eqs. 17-19) */
-            x[0] = -1;
-            x[1] = a->suffix_sin[first + b];
-            x[2] = -a->suffix_cos[first + b];
+            double s = a->scale[first + b];  /* the weighted objective's column scaling (system_step) */
+            x[0] = -s;
+            x[1] = s * a->suffix_sin[first + b];
+            x[2] = -s * a->suffix_cos[first + b];
             if (colp[col + 1] - colp[col] == 4)
-                x[3] = -1;     /* Eq. 16 */
+                x[3] = -s;     /* Eq. 16 */
         }
     }
     for (int32_t r = 0; r < host_row_count; ++r) {
@@ -550,13 +558,16 @@ static pz_status system_build(ww_angles *a, const int32_t *set, int32_t set_coun
 
 /*
  * One step from the residuals g: (J J^T + eps I) mu = J r + g, theta += r -
- * J^T mu, with r = alpha - theta (optimality) or 0 (feasibility). Returns the
+ * J^T mu, with r = target - theta (optimality) or 0 (feasibility). Returns the
  * squared step length, or -1 when CHOLMOD fails.
+ * Weighted objective sum w (theta - target)^2 / 2 (relaxed key nodes): with
+ * S = diag(1/sqrt(w)) and Js = J S (the values evaluate() wrote), the step is
+ * (Js Js^T + eps I) mu = Js S^-1 r + g, delta = r - S Js^T mu; w = 1 gives
+ * back Eqs. 23-24.
  */
 static double system_step(ww_angles *a, const ww_system *sys, cholmod_factor *factor, const double *g,
                           int feasibility, double *r, cholmod_dense *rhs)
 {
-    const ww_wires *w = a->w;
     double beta[2] = {WW_EPS, 0};
     if (!cholmod_factorize_p(sys->J, beta, NULL, 0, factor, a->cc) || a->cc->status < CHOLMOD_OK)
         return -1;
@@ -565,9 +576,10 @@ static double system_step(ww_angles *a, const ww_system *sys, cholmod_factor *fa
     double *b = rhs->x;
     memcpy(b, g, (size_t)sys->nrow * sizeof(double));
     for (int32_t c = 0; c < sys->ncol; ++c) {
-        r[c] = feasibility ? 0 : w->alpha[sys->col_node[c]] - a->theta[sys->col_node[c]];
+        int32_t node = sys->col_node[c];
+        r[c] = feasibility ? 0 : a->target[node] - a->theta[node];
         for (int32_t e = colp[c]; e < colp[c + 1]; ++e)
-            b[rowi[e]] += x[e] * r[c];
+            b[rowi[e]] += x[e] * r[c] / a->scale[node];
     }
     cholmod_dense *mu = cholmod_solve(CHOLMOD_A, factor, rhs, a->cc);
     if (!mu)
@@ -575,9 +587,10 @@ static double system_step(ww_angles *a, const ww_system *sys, cholmod_factor *fa
     const double *m = mu->x;
     double step2 = 0;
     for (int32_t c = 0; c < sys->ncol; ++c) {
-        double d = r[c];
+        double dot = 0;
         for (int32_t e = colp[c]; e < colp[c + 1]; ++e)
-            d -= x[e] * m[rowi[e]];
+            dot += x[e] * m[rowi[e]];
+        double d = r[c] - a->scale[sys->col_node[c]] * dot;
         a->theta[sys->col_node[c]] += d;
         step2 += d * d;
     }
@@ -642,13 +655,29 @@ done:
 }
 
 /*
+ * Fixes key node q at `value`: locked (the paper), or, when its host is in
+ * relax_host, a least-squares target of weight WW_KEY_WEIGHT (relax_keys).
+ */
+static void fix_key_node(ww_angles *a, int32_t q, double value, const uint8_t *relax_host)
+{
+    a->theta[q] = value;
+    if (relax_host && relax_host[a->w->node_host[q]]) {
+        a->target[q] = value;
+        a->scale[q] = 1 / sqrt(WW_KEY_WEIGHT);
+        a->soft[q] = 1;
+    } else {
+        a->locked[q] = 1;
+    }
+}
+
+/*
  * A user-given 2D shape at interior host h (pz_feature_curve.turning): the
  * node whose patch lies left of the curve (its loop, material on the left,
  * runs prev -> h -> next) gets pi - turn, the one on the right pi + turn;
  * they sum to 2 pi (Eq. 13). Returns 0 (Eq. 1 is used) unless h has exactly
  * these two nodes.
  */
-static int lock_given_turn(ww_angles *a, int32_t h)
+static int lock_given_turn(ww_angles *a, int32_t h, const uint8_t *relax_host)
 {
     const ww_wires *w = a->w;
     if (isnan(w->key_turn[h]) || w->topo->vertex_on_boundary[h] || w->host_offsets[h + 1] - w->host_offsets[h] != 2)
@@ -665,25 +694,24 @@ static int lock_given_turn(ww_angles *a, int32_t h)
         else
             return 0;
     }
-    for (int j = 0; j < 2; ++j) {
-        int32_t q = w->host_nodes[w->host_offsets[h] + j];
-        a->theta[q] = theta[j];
-        a->locked[q] = 1;
-    }
+    for (int j = 0; j < 2; ++j)
+        fix_key_node(a, w->host_nodes[w->host_offsets[h] + j], theta[j], relax_host);
     return 1;
 }
 
 /* Key-curve nodes: the user's turning angles where given, else Eq. 1 (the 3D
- * angle, scaled to 2 pi at interior vertices). */
-static int32_t lock_key_angles(ww_angles *a)
+ * angle, scaled to 2 pi at interior vertices). Nodes of hosts in relax_host
+ * (may be NULL) become weighted targets instead of locks. Returns the nodes locked. */
+static int32_t lock_key_angles(ww_angles *a, const uint8_t *relax_host)
 {
     const ww_wires *w = a->w;
     int32_t count = 0;
     for (int32_t h = 0; h < w->topo->vertex_count; ++h) {
         if (!w->key_vertex[h] || w->host_offsets[h] == w->host_offsets[h + 1])
             continue;
-        if (lock_given_turn(a, h)) {
-            count += 2;
+        int relaxed = relax_host && relax_host[h];
+        if (lock_given_turn(a, h, relax_host)) {
+            count += relaxed ? 0 : 2;
             continue;
         }
         double sum = 0;
@@ -691,9 +719,9 @@ static int32_t lock_key_angles(ww_angles *a)
             sum += w->alpha[w->host_nodes[j]];
         for (int32_t j = w->host_offsets[h]; j < w->host_offsets[h + 1]; ++j) {
             int32_t q = w->host_nodes[j];
-            a->theta[q] = w->topo->vertex_on_boundary[h] ? w->alpha[q] : 2 * WW_PI * w->alpha[q] / sum;
-            a->locked[q] = 1;
-            ++count;
+            fix_key_node(a, q, w->topo->vertex_on_boundary[h] ? w->alpha[q] : 2 * WW_PI * w->alpha[q] / sum,
+                         relax_host);
+            count += !relaxed;
         }
     }
     return count;
@@ -753,7 +781,7 @@ static double shape_evidence(const ww_angles *a, int32_t p)
     const ww_wires *w = a->w;
     int32_t known = 0, n = w->patch_offsets[p + 1] - w->patch_offsets[p];
     for (int32_t i = w->patch_offsets[p]; i < w->patch_offsets[p + 1]; ++i)
-        known += a->locked[i];
+        known += a->locked[i] || a->soft[i];  /* a relaxed key angle is still shape evidence */
     return (double)known / n;
 }
 
@@ -836,27 +864,65 @@ nomem:
 /* Layout of the wires (Sec. 3.3) and of the interior (Eq. 11)               */
 /* ------------------------------------------------------------------------ */
 
-/* Walks patch p from a pair of consecutive placed nodes, placing the rest by Eq. 8. */
-static int walk_patch(const ww_wires *w, const double *theta, int32_t p, uint8_t *placed, double *uv)
+/*
+ * Where the walk puts the node after node i of a patch (first: its first
+ * node, n nodes): from the edge prev -> i, turned by pi - theta_i, at the 3D
+ * length of edge i (Eq. 8).
+ */
+static void walk_step(const ww_wires *w, const double *theta, int32_t first, int32_t n, int32_t i, const double *uv,
+                      double out[2])
 {
-    int32_t first = w->patch_offsets[p], n = w->patch_offsets[p + 1] - first, s = -1;
+    const int32_t *host = w->node_host + first;
+    int32_t prev = (i + n - 1) % n;
+    const double *pi = uv + 2 * host[i], *pp = uv + 2 * host[prev];
+    double dx = pi[0] - pp[0], dy = pi[1] - pp[1], norm = hypot(dx, dy);
+    double turn = WW_PI - theta[first + i], c = cos(turn), sn = sin(turn);
+    double l = w->length[first + i] / (norm > 0 ? norm : 1);
+    out[0] = pi[0] + l * (c * dx - sn * dy);
+    out[1] = pi[1] + l * (sn * dx + c * dy);
+}
+
+/*
+ * Walks patch p from a pair of consecutive placed nodes, placing the rest by
+ * Eq. 8. A run of newly placed nodes ends at a node placed before; when the
+ * angles do not close the loop exactly (a best-effort residual), the walk
+ * misses that node by a gap, which is spread over the run in proportion to
+ * arc length instead of being left to the closing edge (which stretched to
+ * 55 times its length on an over-constrained quarter-sphere). With the
+ * constraints met the gap is round-off.
+ */
+static int walk_patch(const ww_wires *w, const double *theta, int32_t p, uint8_t *placed, double *uv, int32_t *run)
+{
+    int32_t first = w->patch_offsets[p], n = w->patch_offsets[p + 1] - first, s = -1, run_count = 0;
     const int32_t *host = w->node_host + first;
     for (int32_t b = 0; b < n && s < 0; ++b)
         if (placed[host[b]] && placed[host[(b + 1) % n]] && host[b] != host[(b + 1) % n])
             s = (b + 1) % n;
     if (s < 0)
         return 0;
+    double arc = 0;
     for (int32_t k = 0; k < n - 1; ++k) {
-        int32_t i = (s + k) % n, prev = (i + n - 1) % n, next = (i + 1) % n;
-        if (placed[host[next]])
+        int32_t i = (s + k) % n, next = (i + 1) % n;
+        double at[2];
+        walk_step(w, theta, first, n, i, uv, at);
+        arc += w->length[first + i];
+        if (!placed[host[next]]) {
+            uv[2 * host[next]] = at[0];
+            uv[2 * host[next] + 1] = at[1];
+            placed[host[next]] = 1;
+            run[run_count++] = next;
             continue;
-        const double *pi = uv + 2 * host[i], *pp = uv + 2 * host[prev];
-        double dx = pi[0] - pp[0], dy = pi[1] - pp[1], norm = hypot(dx, dy);
-        double turn = WW_PI - theta[first + i], c = cos(turn), sn = sin(turn);
-        double l = w->length[first + i] / (norm > 0 ? norm : 1);
-        uv[2 * host[next]] = pi[0] + l * (c * dx - sn * dy);
-        uv[2 * host[next] + 1] = pi[1] + l * (sn * dx + c * dy);
-        placed[host[next]] = 1;
+        }
+        /* next was placed before: spread the miss over the run that leads to it */
+        double gap[2] = {at[0] - uv[2 * host[next]], at[1] - uv[2 * host[next] + 1]}, along = 0;
+        for (int32_t j = 0; j < run_count && arc > 0; ++j) {
+            int32_t q = run[j];
+            along += w->length[first + (q + n - 1) % n];
+            uv[2 * host[q]] -= gap[0] * along / arc;
+            uv[2 * host[q] + 1] -= gap[1] * along / arc;
+        }
+        run_count = 0;
+        arc = 0;
     }
     return 1;
 }
@@ -867,9 +933,10 @@ static pz_status layout_wires(const ww_wires *w, const double *theta, uint8_t *p
     int32_t m = w->patch_count, ne = w->topo->edge_count;
     int32_t *edge_patch = malloc((size_t)ne * 2 * sizeof(int32_t) + 1);
     int32_t *queue = malloc((size_t)m * sizeof(int32_t) + 1);
+    int32_t *run = malloc((size_t)w->node_count * sizeof(int32_t) + 1);
     uint8_t *seen = calloc((size_t)m + 1, 1);
     pz_status status = PZ_OK;
-    if (!edge_patch || !queue || !seen) {
+    if (!edge_patch || !queue || !run || !seen) {
         status = pz_error(ctx, PZ_ERR_NOMEM, "wirewarp: out of memory");
         goto done;
     }
@@ -897,7 +964,7 @@ static pz_status layout_wires(const ww_wires *w, const double *theta, uint8_t *p
         queue[tail++] = seed;
         while (head < tail) {
             int32_t p = queue[head++];
-            if (!walk_patch(w, theta, p, placed, uv)) {
+            if (!walk_patch(w, theta, p, placed, uv, run)) {
                 status = pz_error(ctx, PZ_ERR_INTERNAL, "wirewarp: wire-patch %d could not be placed", p);
                 goto done;
             }
@@ -917,6 +984,7 @@ static pz_status layout_wires(const ww_wires *w, const double *theta, uint8_t *p
 done:
     free(edge_patch);
     free(queue);
+    free(run);
     free(seen);
     return status;
 }
@@ -975,10 +1043,15 @@ static void gauss_seidel(const pz_mesh *mesh, const pz_topology *t, const uint8_
     free(ring);
 }
 
-/* Interior vertices: sum_j w_ij (x_i - x_j) = 0 with the wires fixed (Eq. 11), one CHOLMOD solve. */
-static pz_status layout_interior(const pz_mesh *mesh, const pz_topology *t, int paper_weights, const uint8_t *placed,
+/*
+ * Interior vertices: sum_j w_ij (x_i - x_j) = 0 with the wires fixed (Eq. 11), one CHOLMOD solve.
+ * mode: options->interior (0 cotangent weights, 1 the paper's 1/length weights, 2 the paper's relaxed
+ * Gauss-Seidel, Eq. 12, which is otherwise the fallback when the factorization fails).
+ */
+static pz_status layout_interior(const pz_mesh *mesh, const pz_topology *t, int mode, const uint8_t *placed,
                                  double *uv, int *fallback, pz_ctx *ctx)
 {
+    int paper_weights = mode >= 1;
     int32_t nv = mesh->vertex_count, ne = t->edge_count, n = 0;
     int32_t *index = malloc((size_t)nv * sizeof(int32_t) + 1);
     double *weight = malloc((size_t)ne * sizeof(double) + 1);
@@ -989,7 +1062,11 @@ static pz_status layout_interior(const pz_mesh *mesh, const pz_topology *t, int 
     }
     for (int32_t v = 0; v < nv; ++v)
         index[v] = placed[v] ? -1 : n++;
-    if (n == 0) {
+    if (n == 0 || mode == 2) {
+        if (n > 0) {
+            *fallback = 1;
+            gauss_seidel(mesh, t, placed, uv);
+        }
         free(index);
         free(weight);
         return PZ_OK;
@@ -1109,24 +1186,153 @@ static void wire_length_error(const pz_mesh *mesh, const ww_wires *w, const doub
  * geodesic (alpha = pi everywhere, a hemisphere's equator) that start is a
  * straight line, where the closure Jacobian loses rank and the iteration can
  * wander into a self-crossing loop; this start is the regular polygon there.
+ * A patch whose free nodes are all relaxed key nodes shifts those.
  */
-static void start_on_turning(const ww_wires *w, const uint8_t *locked, double *theta)
+static void start_on_turning(const ww_wires *w, const uint8_t *locked, const uint8_t *soft, double *theta)
 {
     for (int32_t p = 0; p < w->patch_count; ++p) {
-        int32_t first = w->patch_offsets[p], n = w->patch_offsets[p + 1] - first, free_count = 0;
+        int32_t first = w->patch_offsets[p], n = w->patch_offsets[p + 1] - first, free_count = 0, soft_count = 0;
         double deficit = (n - 2) * WW_PI;
         for (int32_t i = first; i < first + n; ++i) {
             deficit -= theta[i];
-            free_count += !locked[i];
+            free_count += !locked[i] && !soft[i];
+            soft_count += !locked[i] && soft[i];
         }
-        for (int32_t i = first; free_count > 0 && i < first + n; ++i)
-            if (!locked[i])
-                theta[i] += deficit / free_count;
+        int use_soft = free_count == 0;
+        int32_t count = use_soft ? soft_count : free_count;
+        for (int32_t i = first; count > 0 && i < first + n; ++i)
+            if (!locked[i] && (soft[i] != 0) == use_soft)
+                theta[i] += deficit / count;
     }
 }
 
+/* One solve of all the angles from scratch; key nodes of hosts in relax_host (may be NULL) are targets. */
+static pz_status angles_pass(ww_angles *a, const pz_wirewarp_options *options, const uint8_t *relax_host,
+                             int32_t *all, int32_t *locked_count, pz_ctx *ctx)
+{
+    const ww_wires *w = a->w;
+    for (int32_t i = 0; i < w->node_count; ++i) {
+        a->theta[i] = a->target[i] = w->alpha[i];  /* the paper's start: theta = alpha */
+        a->scale[i] = 1;
+        a->soft[i] = a->locked[i] = 0;
+    }
+    a->residual = 0;
+    a->constraint_count = 0;
+    *locked_count = lock_key_angles(a, relax_host);
+    start_on_turning(w, a->locked, a->soft, a->theta);
+    if (options && options->scheme == 1)
+        return progressive(a, locked_count, ctx);
+    for (int32_t p = 0; p < w->patch_count; ++p)
+        all[p] = p;
+    return solve_set(a, all, w->patch_count, ctx);
+}
+
+/* Per feature curve, the largest change of its relaxed key angles from their fixed values (0: none). */
+static void key_curve_changes(const ww_angles *a, const pz_feature_curves *features, double *change)
+{
+    const ww_wires *w = a->w;
+    for (int32_t c = 0; c < features->curve_count; ++c) {
+        const pz_feature_curve *curve = &features->curves[c];
+        change[c] = 0;
+        for (int32_t i = 0; curve->kind == PZ_FEATURE_KEY && i < curve->vertex_count; ++i) {
+            int32_t h = curve->vertices[i];
+            for (int32_t j = w->host_offsets[h]; j < w->host_offsets[h + 1]; ++j) {
+                int32_t q = w->host_nodes[j];
+                if (a->soft[q])
+                    change[c] = fmax(change[c], fabs(a->theta[q] - a->target[q]));
+            }
+        }
+    }
+}
+
+/* The relaxed curves of `change` into the result, as indices of the caller's curves (origin, may be NULL). */
+static void record_relaxed(const pz_feature_curves *features, const int32_t *origin, const double *change,
+                           pz_wirewarp_result *r)
+{
+    r->relaxed_key_curve_count = 0;
+    r->relaxed_key_angle = 0;
+    for (int32_t c = 0; c < features->curve_count; ++c) {
+        if (!(change[c] > WW_RELAXED_ANGLE))
+            continue;
+        if (r->relaxed_key_curve_count < PZ_WIREWARP_RELAXED_MAX)
+            r->relaxed_key_curves[r->relaxed_key_curve_count] = origin ? origin[c] : c;
+        ++r->relaxed_key_curve_count;
+        r->relaxed_key_angle = fmax(r->relaxed_key_angle, change[c]);
+    }
+}
+
+/*
+ * Over-constraining key curves (paper Figs. 13-14: the patches cannot close
+ * with all key angles fixed). The paper's advice is to release the key
+ * curves that conflict into accessory ones; done automatically here in the
+ * least-squares sense: (1) every key angle becomes a target of weight
+ * WW_KEY_WEIGHT (free angles weigh 1), so the misclosure is spread over the
+ * key angles that must give, evenly where they all weigh the same (a whole
+ * boundary given as a key curve), and every wire keeps its length; (2) the
+ * key curves that did not move (by WW_RELAXED_ANGLE, or by a thousandth of
+ * the largest move) are fixed again and the rest solved once more, kept
+ * when it closes as well as (1). Without
+ * this, the locked loop was drawn open and its closing edge took the whole
+ * gap (55 times its length on a 2K quarter-sphere).
+ */
+static pz_status relax_keys(ww_angles *a, const pz_wirewarp_options *options, const pz_feature_curves *features,
+                            const int32_t *origin, int32_t *all, pz_wirewarp_result *r, pz_ctx *ctx)
+{
+    const ww_wires *w = a->w;
+    int32_t nv = w->topo->vertex_count, nn = w->node_count, count = features->curve_count;
+    uint8_t *relax_host = malloc((size_t)nv + 1);
+    double *change = malloc((size_t)count * sizeof(double) + 1);
+    double *kept = malloc((size_t)nn * sizeof(double) + 1);
+    pz_status status = PZ_OK;
+    if (!relax_host || !change || !kept) {
+        status = pz_error(ctx, PZ_ERR_NOMEM, "wirewarp: out of memory");
+        goto done;
+    }
+    memcpy(relax_host, w->key_vertex, (size_t)nv);
+    if ((status = angles_pass(a, options, relax_host, all, &r->locked_count, ctx)))
+        goto done;
+    key_curve_changes(a, features, change);
+    record_relaxed(features, origin, change, r);
+    memcpy(kept, a->theta, (size_t)nn * sizeof(double));
+    double kept_residual = a->residual;
+    int32_t kept_locked = r->locked_count, kept_constraints = a->constraint_count, fixed_again = 0;
+    /* A curve that only gave a thousandth of what the conflicting ones gave is fixed again too: with a
+     * large misclosure, the 1/weight share a compatible curve takes can exceed WW_RELAXED_ANGLE. */
+    double moved = WW_RELAXED_ANGLE;
+    for (int32_t c = 0; c < count; ++c)
+        moved = fmax(moved, 1e-3 * change[c]);
+    memset(relax_host, 0, (size_t)nv);
+    for (int32_t c = 0; c < count; ++c) {
+        const pz_feature_curve *curve = &features->curves[c];
+        if (curve->kind != PZ_FEATURE_KEY)
+            continue;
+        fixed_again += !(change[c] > moved);
+        for (int32_t i = 0; change[c] > moved && i < curve->vertex_count; ++i)
+            relax_host[curve->vertices[i]] = 1;
+    }
+    if (fixed_again == 0 || r->relaxed_key_curve_count == 0)
+        goto done;
+    if ((status = angles_pass(a, options, relax_host, all, &r->locked_count, ctx)))
+        goto done;
+    if (a->residual <= fmax(WW_BEST_EFFORT, kept_residual)) {
+        key_curve_changes(a, features, change);
+        record_relaxed(features, origin, change, r);
+    } else { /* fixing them again reopened a patch: keep (1) */
+        memcpy(a->theta, kept, (size_t)nn * sizeof(double));
+        a->residual = kept_residual;
+        a->constraint_count = kept_constraints;
+        r->locked_count = kept_locked;
+    }
+done:
+    free(relax_host);
+    free(change);
+    free(kept);
+    return status;
+}
+
 static pz_status warp_angles(const pz_pattern *pattern, const ww_wires *w, const pz_wirewarp_options *options,
-                             double *theta, pz_wirewarp_result *r, pz_ctx *ctx)
+                             const pz_feature_curves *features, const int32_t *origin, double *theta,
+                             pz_wirewarp_result *r, pz_ctx *ctx)
 {
     int32_t nn = w->node_count, m = w->patch_count;
     ww_angles a = {.w = w, .mesh = pattern->mesh, .theta = theta,
@@ -1138,6 +1344,9 @@ static pz_status warp_angles(const pz_pattern *pattern, const ww_wires *w, const
     a.phi = malloc((size_t)nn * sizeof(double) + 1);
     a.suffix_sin = malloc((size_t)nn * sizeof(double) + 1);
     a.suffix_cos = malloc((size_t)nn * sizeof(double) + 1);
+    a.target = malloc((size_t)nn * sizeof(double) + 1);
+    a.scale = malloc((size_t)nn * sizeof(double) + 1);
+    a.soft = calloc((size_t)nn + 1, 1);
     int32_t *all = malloc((size_t)m * sizeof(int32_t) + 1);
     cholmod_common cc;
     cholmod_start(&cc);
@@ -1145,29 +1354,26 @@ static pz_status warp_angles(const pz_pattern *pattern, const ww_wires *w, const
     cc.print = 0; /* failures are reported through ctx or result->best_effort */
     a.cc = &cc;
     pz_status status = PZ_OK;
-    if (!a.locked || !a.column || !a.host_row || !a.in_set || !a.phi || !a.suffix_sin || !a.suffix_cos || !all) {
+    if (!a.locked || !a.column || !a.host_row || !a.in_set || !a.phi || !a.suffix_sin || !a.suffix_cos || !a.target ||
+        !a.scale || !a.soft || !all) {
         status = pz_error(ctx, PZ_ERR_NOMEM, "wirewarp: out of memory for %d wire-nodes", (int)nn);
         goto done;
     }
-    for (int32_t i = 0; i < nn; ++i) {
-        theta[i] = w->alpha[i];  /* the paper's start: theta = alpha */
+    for (int32_t i = 0; i < nn; ++i)
         a.column[i] = -1;
-    }
     for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v)
         a.host_row[v] = -1;
-    r->locked_count = lock_key_angles(&a);
-    start_on_turning(w, a.locked, theta);
-    if (options && options->scheme == 1) {
-        status = progressive(&a, &r->locked_count, ctx);
-    } else {
-        for (int32_t p = 0; p < m; ++p)
-            all[p] = p;
-        status = solve_set(&a, all, m, ctx);
-    }
+    if ((status = angles_pass(&a, options, NULL, all, &r->locked_count, ctx)))
+        goto done;
+    int any_key = 0;
+    for (int32_t c = 0; features && c < features->curve_count; ++c)
+        any_key |= features->curves[c].kind == PZ_FEATURE_KEY;
+    if (!(a.residual <= WW_BEST_EFFORT) && any_key)
+        status = relax_keys(&a, options, features, origin, all, r, ctx);
     r->iterations = a.iterations;
     r->constraint_count = a.constraint_count;
     r->constraint_residual = a.residual;
-    r->best_effort = !(a.residual <= WW_BEST_EFFORT);
+    r->best_effort = !(a.residual <= WW_BEST_EFFORT) || r->relaxed_key_curve_count > 0;
     if (r->best_effort)
         for (int32_t i = 0; i < nn; ++i)
             if (!isfinite(theta[i]))
@@ -1181,6 +1387,9 @@ done:
     free(a.phi);
     free(a.suffix_sin);
     free(a.suffix_cos);
+    free(a.target);
+    free(a.scale);
+    free(a.soft);
     free(all);
     return status;
 }
@@ -1462,8 +1671,10 @@ static pz_status untangle(const pz_pattern *pattern, const uint8_t *placed, doub
     return status;
 }
 
+/* One WireWarping of the pattern; origin (may be NULL) maps features' indices to the caller's (trimming). */
 static pz_status wirewarp_once(const pz_pattern *pattern, const pz_wirewarp_options *options,
-                               const pz_feature_curves *features, double *uv, pz_wirewarp_result *r, pz_ctx *ctx)
+                               const pz_feature_curves *features, const int32_t *origin, double *uv,
+                               pz_wirewarp_result *r, pz_ctx *ctx)
 {
     memset(r, 0, sizeof *r);
     pz_status status = check_pattern(pattern, uv, ctx);
@@ -1484,7 +1695,7 @@ static pz_status wirewarp_once(const pz_pattern *pattern, const pz_wirewarp_opti
         goto done;
     }
     memset(uv, 0, (size_t)mesh->vertex_count * 2 * sizeof(double));
-    if ((status = warp_angles(pattern, &w, options, theta, r, ctx)))
+    if ((status = warp_angles(pattern, &w, options, features, origin, theta, r, ctx)))
         goto done;
     double angles_done = pz_seconds();
     r->angle_ms = 1e3 * (angles_done - start);
@@ -1492,8 +1703,9 @@ static pz_status wirewarp_once(const pz_pattern *pattern, const pz_wirewarp_opti
         goto done;
     double wires_done = pz_seconds();
     r->layout_ms = 1e3 * (wires_done - angles_done);
-    r->interior_inverse_length = options && options->interior == 1;
-    if ((status = layout_interior(mesh, w.topo, r->interior_inverse_length, placed, uv, &r->interior_fallback, ctx)))
+    int interior = options ? options->interior : 0;
+    r->interior_inverse_length = interior >= 1;  /* Eq. 12 iterates with the same 1/length weights */
+    if ((status = layout_interior(mesh, w.topo, interior, placed, uv, &r->interior_fallback, ctx)))
         goto done;
     r->interior_ms = 1e3 * (pz_seconds() - wires_done);
     double up[3] = {0, 0, 1};
@@ -1544,9 +1756,10 @@ static void mark_near_flips(const pz_mesh *mesh, const double *uv, uint8_t *near
     }
 }
 
-/* Drops the dangling ends of `curves` that lie near a flip; returns the edges dropped. */
+/* Drops the dangling ends of `curves` that lie near a flip; returns the edges dropped. A curve left
+ * with one vertex is removed; origin (curve -> the caller's index) follows. */
 static int32_t trim_dangling_ends(const pz_mesh *mesh, const uint8_t *on_boundary, const uint8_t *near,
-                                  int32_t *uses, pz_feature_curves *curves)
+                                  int32_t *uses, pz_feature_curves *curves, int32_t *origin)
 {
     int32_t dropped = 0;
     memset(uses, 0, (size_t)mesh->vertex_count * sizeof(int32_t));
@@ -1571,6 +1784,7 @@ static int32_t trim_dangling_ends(const pz_mesh *mesh, const uint8_t *on_boundar
     int32_t kept = 0;
     for (int32_t c = 0; c < curves->curve_count; ++c) {
         if (curves->curves[c].vertex_count >= 2) {
+            origin[kept] = origin[c];
             curves->curves[kept++] = curves->curves[c];
         } else {
             free(curves->curves[c].vertices);
@@ -1611,7 +1825,7 @@ pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options
 {
     pz_wirewarp_result local;
     pz_wirewarp_result *r = result ? result : &local;
-    pz_status status = wirewarp_once(pattern, options, features, uv, r, ctx);
+    pz_status status = wirewarp_once(pattern, options, features, NULL, uv, r, ctx);
     if (status || r->flipped_triangles == 0 || !features || features->curve_count == 0)
         return status;
     const pz_mesh *mesh = pattern->mesh;
@@ -1619,20 +1833,23 @@ pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options
     pz_feature_curves *trimmed = copy_curves(features);
     uint8_t *near = malloc((size_t)mesh->vertex_count + 1);
     int32_t *uses = malloc((size_t)mesh->vertex_count * sizeof(int32_t) + 1);
-    if (!trimmed || !near || !uses) {
+    int32_t *origin = malloc((size_t)features->curve_count * sizeof(int32_t) + 1);
+    if (!trimmed || !near || !uses || !origin) {
         status = pz_error(ctx, PZ_ERR_NOMEM, "wirewarp: out of memory");
         goto done;
     }
     if ((status = pz_topology_build(mesh, &topology, ctx)))
         goto done;
+    for (int32_t c = 0; c < features->curve_count; ++c)
+        origin[c] = c;
     int32_t total = 0;
     for (int round = 0; round < TRIM_ROUNDS && r->flipped_triangles > 0; ++round) {
         mark_near_flips(mesh, uv, near);
-        int32_t dropped = trim_dangling_ends(mesh, topology->vertex_on_boundary, near, uses, trimmed);
+        int32_t dropped = trim_dangling_ends(mesh, topology->vertex_on_boundary, near, uses, trimmed, origin);
         if (!dropped)
             break;
         total += dropped;
-        if ((status = wirewarp_once(pattern, options, trimmed, uv, r, ctx)))
+        if ((status = wirewarp_once(pattern, options, trimmed, origin, uv, r, ctx)))
             goto done;
     }
     r->trimmed_feature_edges = total;
@@ -1642,6 +1859,7 @@ done:
     pz_feature_curves_free(&trimmed);
     free(near);
     free(uses);
+    free(origin);
     return status;
 }
 
@@ -1894,8 +2112,11 @@ static pz_status snap_one(const pz_pattern *pattern, ww_snapper *s, const pz_fea
     return PZ_OK;
 }
 
-pz_status pz_feature_curves_snap(const pz_pattern *pattern, const pz_feature_polyline *polylines,
-                                 int32_t polyline_count, double tolerance_mm, pz_feature_curves **out, pz_ctx *ctx)
+/* Both snapping entry points: strict (the first bad curve fails the call) or lenient (it is skipped). */
+static pz_status snap_curves(const pz_pattern *pattern, const pz_feature_polyline *polylines, int32_t polyline_count,
+                             double tolerance_mm, pz_feature_curves **out, int lenient, uint8_t *skipped,
+                             void (*on_skip)(void *user, int32_t curve, const char *problem), void *user,
+                             pz_ctx *ctx)
 {
     *out = NULL;
     if (!pattern || !pattern->mesh || (polyline_count > 0 && !polylines) || polyline_count < 0)
@@ -1922,9 +2143,22 @@ pz_status pz_feature_curves_snap(const pz_pattern *pattern, const pz_feature_pol
         goto done;
     }
     for (int32_t c = 0; c < polyline_count; ++c) {
-        if ((status = snap_one(pattern, &s, &polylines[c], c, tolerance_mm, &curves->curves[c], ctx)))
+        pz_feature_curve *curve = &curves->curves[curves->curve_count];
+        status = snap_one(pattern, &s, &polylines[c], c, tolerance_mm, curve, ctx);
+        if (skipped)
+            skipped[c] = status == PZ_ERR_DATA && lenient;
+        if (status == PZ_ERR_DATA && lenient) {
+            /* snap_one freed the curve's vertices; the slot is reused by the next curve */
+            memset(curve, 0, sizeof *curve);
+            if (on_skip)
+                on_skip(user, c, strncmp(ctx->error, "features: ", 10) == 0 ? ctx->error + 10 : ctx->error);
+            ctx->error[0] = 0;
+            status = PZ_OK;
+            continue;
+        }
+        if (status)
             goto done;
-        curves->curve_count = c + 1;
+        ++curves->curve_count;
     }
     *out = curves;
     curves = NULL;
@@ -1933,4 +2167,19 @@ done:
     snapper_free(&s);
     pz_topology_free(&t);
     return status;
+}
+
+pz_status pz_feature_curves_snap(const pz_pattern *pattern, const pz_feature_polyline *polylines,
+                                 int32_t polyline_count, double tolerance_mm, pz_feature_curves **out, pz_ctx *ctx)
+{
+    return snap_curves(pattern, polylines, polyline_count, tolerance_mm, out, 0, NULL, NULL, NULL, ctx);
+}
+
+pz_status pz_feature_curves_snap_lenient(const pz_pattern *pattern, const pz_feature_polyline *polylines,
+                                         int32_t polyline_count, double tolerance_mm, pz_feature_curves **out,
+                                         uint8_t *skipped,
+                                         void (*on_skip)(void *user, int32_t curve, const char *problem),
+                                         void *user, pz_ctx *ctx)
+{
+    return snap_curves(pattern, polylines, polyline_count, tolerance_mm, out, 1, skipped, on_skip, user, ctx);
 }

@@ -1056,6 +1056,26 @@ static void add_wirewarp_result(json_builder *builder, cJSON *object, const pz_f
     add_number(builder, object, "angle_ms", r->angle_ms, 3);
     add_number(builder, object, "layout_ms", r->layout_ms, 3);
     add_number(builder, object, "interior_ms", r->interior_ms, 3);
+    /* What a best-effort result gave up (docs/wirewarp.md "Results that are not errors"). */
+    add_number(builder, object, "trimmed_feature_edges", r->trimmed_feature_edges, 0);
+    add_number(builder, object, "untangled_vertices", r->untangled_vertices, 0);
+    int32_t listed = r->relaxed_key_curve_count < PZ_WIREWARP_RELAXED_MAX ? r->relaxed_key_curve_count
+                                                                           : PZ_WIREWARP_RELAXED_MAX;
+    cJSON *relaxed = cJSON_CreateIntArray(r->relaxed_key_curves, listed);
+    if (!relaxed || !cJSON_AddItemToObject(object, "relaxed_key_curves", relaxed)) {
+        cJSON_Delete(relaxed);
+        builder->failed = 1;
+    }
+    add_number(builder, object, "relaxed_key_curve_count", r->relaxed_key_curve_count, 0);
+    add_number(builder, object, "relaxed_key_angle_deg", r->relaxed_key_angle * 180 / 3.14159265358979323846, 6);
+    cJSON *skipped = add_array(builder, object, "skipped_feature_curves");
+    for (int32_t i = 0; skipped && i < report->skipped_feature_count; ++i) {
+        cJSON *curve = append_object(builder, skipped);
+        if (!curve)
+            return;
+        add_number(builder, curve, "curve", report->skipped_features[i].curve, 0);
+        add_string(builder, curve, "problem", report->skipped_features[i].problem);
+    }
 }
 
 static const char *stop_name(int stop)
