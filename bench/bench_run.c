@@ -1,7 +1,7 @@
 /*
  * bench/bench_run.c -- how long `panelize run` takes, stage by stage, on every
  * garment in ../shared/data/garments (skipped when missing) and on generated
- * bodices (default 7K and 50K faces).
+ * bodices (default 7K and 50K faces), skirt and sleeve (7K, with the default sizes).
  *
  *   bench_run [--data DIR] [FACES]...
  *
@@ -128,13 +128,13 @@ static int measure(const char *name, const char *path, int prepare_off)
     return 0;
 }
 
-static int measure_generated(int faces)
+static int measure_generated(const char *shape, int faces)
 {
     char name[64], path[4200], count[32];
-    snprintf(name, sizeof name, "bodice-%d", faces);
+    snprintf(name, sizeof name, "%s-%d", shape, faces);
     snprintf(path, sizeof path, "%s/%s.obj", scratch, name);
     snprintf(count, sizeof count, "%d", faces);
-    char *args[] = {binary, "generate", "bodice", "-o", path, "--faces", count, NULL};
+    char *args[] = {binary, "generate", (char *)shape, "-o", path, "--faces", count, NULL};
     if (run_panelize(args) != 0) {
         printf("bench_run garment=%s generate failed\n", name);
         return 1;
@@ -201,12 +201,16 @@ int main(int argc, char **argv)
         else if (size_count < 16)
             sizes[size_count++] = atoi(argv[i]);
     }
-    if (size_count == 0)
+    int defaults = size_count == 0;
+    if (defaults)
         sizes[size_count++] = 7000, sizes[size_count++] = 50000;
     printf("bench_run load_average=%.2f\n", bench_load_average());
     int failures = measure_shared(data);
     for (int i = 0; i < size_count; ++i)
-        failures += measure_generated(sizes[i]);
+        failures += measure_generated("bodice", sizes[i]);
+    /* The generated skirt and sleeve at the garments' size (issue 5's acceptance table). */
+    if (defaults)
+        failures += measure_generated("skirt", 7000) + measure_generated("sleeve", 7000);
     char command[4200];
     snprintf(command, sizeof command, "rm -rf '%s'", scratch);
     if (system(command) != 0)

@@ -18,7 +18,9 @@
  *  3. flatten with the chosen back-end: pz_param_textile (pietroni2022
  *     Sec. 4.3, default), pz_param_lscm_pattern (Levy 2002),
  *     pz_param_wirewarp (wang2008; --scheme, --features snapped with
- *     pz_feature_curves_snap) or pz_param_springmass (wang2002 with the
+ *     pz_feature_curves_snap_lenient: a curve off the mesh is left out with
+ *     a warning; relaxed key curves are a warning too) or
+ *     pz_param_springmass (wang2002 with the
  *     IISERM heap relaxation; --relax; orthotropic with --fabric), then a
  *     shelf layout when pieces overlap. The grain is --grain or, by default,
  *     the garment's vertical axis (pz_mesh_vertical_axis: y-up tools and
@@ -704,42 +706,88 @@ static pz_status read_correspondences(const pz_cli_args *args, const garment_inp
 /* What the back-end reports about its own run (backend_result in report.json). */
 typedef struct backend_outcome {
     pz_textile_result textile;
-    pz_wirewarp_result wirewarp;
+    pz_wirewarp_result wirewarp;       /* relaxed_key_curves are indices in the features file */
     pz_springmass_result springmass;   /* cleared with pz_springmass_result_clear */
-    int32_t feature_count;
+    int32_t feature_count;             /* curves of --features used */
+    pz_skipped_feature *skipped;       /* curves of --features left out (skipped_count), malloc'd */
+    int32_t skipped_count;
+    size_t skipped_capacity;
+    int skipped_failed;                /* out of memory while recording a skipped curve */
     double ms;
 } backend_outcome;
 
-/* --features: read in the input's units, converted like the mesh, snapped to the cut mesh's edges. */
+static void backend_outcome_clear(backend_outcome *outcome)
+{
+    pz_springmass_result_clear(&outcome->springmass);
+    free(outcome->skipped);
+    memset(outcome, 0, sizeof *outcome);
+}
+
+/* pz_feature_curves_snap_lenient's report of a curve it left out. */
+static void record_skipped_curve(void *user, int32_t curve, const char *problem)
+{
+    backend_outcome *outcome = user;
+    if ((size_t)outcome->skipped_count == outcome->skipped_capacity) {
+        size_t capacity = outcome->skipped_capacity ? 2 * outcome->skipped_capacity : 4;
+        pz_skipped_feature *bigger = realloc(outcome->skipped, capacity * sizeof *bigger);
+        if (!bigger) {
+            outcome->skipped_failed = 1;
+            return;
+        }
+        outcome->skipped = bigger;
+        outcome->skipped_capacity = capacity;
+    }
+    pz_skipped_feature *skipped = &outcome->skipped[outcome->skipped_count++];
+    skipped->curve = curve;
+    snprintf(skipped->problem, sizeof skipped->problem, "%s", problem);
+}
+
+/*
+ * --features: read in the input's units, converted like the mesh, snapped to the cut mesh's edges.
+ * A malformed file fails (exit 65); a well-formed curve that cannot be snapped (off the mesh, across
+ * panels) is left out and recorded in outcome->skipped (a warning and report.json say so): the issue
+ * asks for a best-effort result. *kept_from gets, per curve used, its index in the file.
+ */
 static pz_status read_feature_curves(const flatten_settings *settings, const pz_pattern *pattern, double mm_per_unit,
-                                     pz_feature_curves **out, pz_ctx *ctx)
+                                     pz_feature_curves **out, int32_t **kept_from, backend_outcome *outcome,
+                                     pz_ctx *ctx)
 {
     *out = NULL;
+    *kept_from = NULL;
     if (!settings->features_path)
         return PZ_OK;
     pz_feature_file file;
     pz_status status = pz_flatten_read_features(settings->features_path, mm_per_unit, &file, ctx);
     if (status != PZ_OK)
         return status;
-    status = pz_feature_curves_snap(pattern, file.polylines, file.curve_count, 0, out, ctx);
+    uint8_t *skipped = calloc((size_t)file.curve_count + 1, 1);
+    *kept_from = malloc((size_t)file.curve_count * sizeof(int32_t) + 1);
+    if (!skipped || !*kept_from)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    if (status == PZ_OK)
+        status = pz_feature_curves_snap_lenient(pattern, file.polylines, file.curve_count, 0, out, skipped,
+                                                record_skipped_curve, outcome, ctx);
+    if (status == PZ_OK && outcome->skipped_failed)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory");
+    for (int32_t c = 0, k = 0; status == PZ_OK && c < file.curve_count; ++c)
+        if (!skipped[c])
+            (*kept_from)[k++] = c;
     pz_feature_file_clear(&file);
+    free(skipped);
     if (status != PZ_OK) {
-        /* The library names the curve and point; add the file. */
-        char message[sizeof ctx->error];
-        const char *text = ctx->error;
-        if (strncmp(text, "features: ", 10) == 0)
-            text += 10;
-        snprintf(message, sizeof message, "%s", text);
-        return pz_error(ctx, status, "%s: %s", settings->features_path, message);
+        pz_feature_curves_free(out);
+        free(*kept_from);
+        *kept_from = NULL;
     }
-    return PZ_OK;
+    return status;
 }
 
 static pz_status flatten_wirewarp(const flatten_settings *settings, const pz_pattern *pattern, double mm_per_unit,
                                   double *uv, backend_outcome *outcome, pz_ctx *ctx)
 {
     pz_feature_curves *features = NULL;
-    pz_status status = read_feature_curves(settings, pattern, mm_per_unit, &features, ctx);
+    int32_t *kept_from = NULL;
+    pz_status status = read_feature_curves(settings, pattern, mm_per_unit, &features, &kept_from, outcome, ctx);
     if (status != PZ_OK)
         return status;
     outcome->feature_count = features ? features->curve_count : 0;
@@ -748,8 +796,42 @@ static pz_status flatten_wirewarp(const flatten_settings *settings, const pz_pat
     options.grain_given = 1;
     memcpy(options.grain, settings->grain, sizeof options.grain);
     status = pz_param_wirewarp(pattern, &options, features, uv, &outcome->wirewarp, ctx);
+    /* The user knows the curves by their place in the file. */
+    pz_wirewarp_result *r = &outcome->wirewarp;
+    for (int32_t i = 0; kept_from && i < r->relaxed_key_curve_count && i < PZ_WIREWARP_RELAXED_MAX; ++i)
+        r->relaxed_key_curves[i] = kept_from[r->relaxed_key_curves[i]];
     pz_feature_curves_free(&features);
+    free(kept_from);
     return status;
+}
+
+/* One warning line per thing the user should know about a best-effort WireWarping (docs/wirewarp.md). */
+static void warn_wirewarp(const flatten_settings *settings, const backend_outcome *outcome, pz_ctx *ctx)
+{
+    const char *file = settings->features_path ? settings->features_path : "--features";
+    for (int32_t i = 0; i < outcome->skipped_count; ++i)
+        pz_note(ctx, "warning: %s: %s; the curve is left out, the pattern is flattened with the %d other%s", file,
+                outcome->skipped[i].problem, (int)outcome->feature_count, outcome->feature_count == 1 ? "" : "s");
+    const pz_wirewarp_result *r = &outcome->wirewarp;
+    if (r->relaxed_key_curve_count > 0) {
+        char list[160] = "";
+        size_t used = 0;
+        for (int32_t i = 0; i < r->relaxed_key_curve_count && i < PZ_WIREWARP_RELAXED_MAX && used < sizeof list; ++i)
+            used += (size_t)snprintf(list + used, sizeof list - used, "%s%d", i ? ", " : "",
+                                     (int)r->relaxed_key_curves[i]);
+        pz_note(ctx, "warning: %s: key curve%s %s%s over-constrain%s the pattern (the pieces cannot close with "
+                "their angles fixed, wang2008 Figs. 13-14): best effort, %s angles relaxed by up to %.2f degrees, "
+                "wire lengths kept (worst error %.2g)", file, r->relaxed_key_curve_count == 1 ? "" : "s", list,
+                r->relaxed_key_curve_count > PZ_WIREWARP_RELAXED_MAX ? ", ..." : "",
+                r->relaxed_key_curve_count == 1 ? "s" : "", r->relaxed_key_curve_count == 1 ? "its" : "their",
+                r->relaxed_key_angle * 180 / 3.14159265358979323846,
+                r->max_wire_error);
+    }
+    if (r->trimmed_feature_edges > 0 || r->flipped_triangles > 0 || !(r->constraint_residual <= 1e-9))
+        pz_note(ctx, "warning: wirewarp: best effort: %d edge%s given up at dangling feature-curve ends, %d face%s "
+                "still flipped, constraint residual %.2g, worst wire error %.2g",
+                (int)r->trimmed_feature_edges, r->trimmed_feature_edges == 1 ? "" : "s", (int)r->flipped_triangles,
+                r->flipped_triangles == 1 ? "" : "s", r->constraint_residual, r->max_wire_error);
 }
 
 static pz_status flatten_springmass(const flatten_settings *settings, const pz_pattern *pattern, double *uv,
@@ -959,7 +1041,7 @@ static pz_status build_report(flatten_run *run, pz_ctx *ctx)
     }
     const pz_flatten_extension *extension = run->extension;
     if (root && !failed && extension && extension->extend_report)
-        failed |= !extension->extend_report(extension->user, root, run->input->mesh, run->pattern,
+        failed |= !extension->extend_report(extension->user, root, run->input->mesh, run->pattern, run->uv,
                                             run->report.metrics[0]);
     run->report_text = root && !failed ? cJSON_Print(root) : NULL;
     if (!run->report_text) {
@@ -1124,7 +1206,7 @@ static pz_status judge_pattern(const pz_flatten_extension *extension, const pz_p
     pz_metrics *metrics = NULL;
     pz_status status = pz_metrics_compute(pattern, uv, 0, fabric, &metrics, ctx);
     if (status == PZ_OK)
-        *accepted = extension->accept_pattern(extension->user, pattern, metrics);
+        *accepted = extension->accept_pattern(extension->user, pattern, uv, metrics);
     pz_metrics_free(&metrics);
     return status;
 }
@@ -1176,8 +1258,7 @@ pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension
     double panels_ms = 0, pattern_ms = 0, flatten_ms = 0;
     for (int round = 0; status == PZ_OK; ++round) {
         if (round > 0) {
-            pz_springmass_result_clear(&outcome.springmass);
-            memset(&outcome, 0, sizeof outcome);
+            backend_outcome_clear(&outcome);
             free(uv);
             uv = NULL;
             pz_pattern_free(&pattern);
@@ -1205,6 +1286,8 @@ pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension
             break;
     }
     timings[TIME_PATTERN] = pattern_ms;
+    if (status == PZ_OK && settings.backend == BACKEND_WIREWARP)
+        warn_wirewarp(&settings, &outcome, ctx);  /* once, for the pattern kept */
     if (status == PZ_OK)
         status = pz_pattern_layout(pattern, uv, LAYOUT_GAP_MM, &layout_moved, ctx);
     timings[TIME_FLATTEN] = flatten_ms + pz_cli_elapsed_ms(mark, now = pz_seconds()), mark = now;
@@ -1268,6 +1351,8 @@ pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension
         report->wirewarp = settings.backend == BACKEND_WIREWARP ? &outcome.wirewarp : NULL;
         report->progressive = settings.progressive;
         report->feature_count = outcome.feature_count;
+        report->skipped_features = outcome.skipped;
+        report->skipped_feature_count = outcome.skipped_count;
         report->springmass = run.springmass;
         report->relax_full = settings.relax_full;
         report->orthotropic = settings.fabric_given;
@@ -1297,7 +1382,7 @@ pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension
     for (int i = 0; metrics && i < metrics_count; ++i)
         pz_metrics_free(&metrics[i]);
     free(metrics);
-    pz_springmass_result_clear(&outcome.springmass);
+    backend_outcome_clear(&outcome);
     free(uv);
     pz_pattern_free(&pattern);
     pz_correspondences_clear(&correspondences);

@@ -99,6 +99,12 @@ pz_status pz_pattern_write_obj(FILE *file, const pz_mesh *garment, const double 
 pz_status pz_pattern_write_svg(FILE *file, const pz_pattern *pattern, const double *uv,
                                const char *const *panel_names, pz_ctx *ctx);
 
+/** A --features curve left out of the flattening (not on the mesh, across panels, ...): index in the file, why. */
+typedef struct pz_skipped_feature {
+    int32_t curve;
+    char problem[256];
+} pz_skipped_feature;
+
 /** Everything report.json says besides the metrics. */
 typedef struct pz_flatten_report {
     const char *const *input_paths;
@@ -116,7 +122,9 @@ typedef struct pz_flatten_report {
     const pz_textile_result *textile;  /* textile only, else NULL */
     const pz_wirewarp_result *wirewarp;  /* wirewarp only, else NULL */
     int progressive;              /* wirewarp: --scheme progressive */
-    int32_t feature_count;        /* wirewarp: curves from --features */
+    int32_t feature_count;        /* wirewarp: curves from --features that were used */
+    const pz_skipped_feature *skipped_features;  /* wirewarp: the curves left out, skipped_feature_count */
+    int32_t skipped_feature_count;
     const pz_springmass_result *springmass;  /* springmass only, else NULL */
     int relax_full;               /* springmass: --relax full */
     int orthotropic;              /* springmass: --fabric given */
@@ -159,18 +167,20 @@ typedef struct pz_flatten_extension {
     pz_status (*choose_panels)(void *user, pz_mesh *garment, int32_t **face_panel, int32_t *panel_count,
                                uint8_t **extra_cuts, pz_ctx *ctx);
     const char *panels_source;           /* report's panels.source for choose_panels ("segmentation") */
-    /* Called after each flattening of the panels choose_panels gave (rest-pose metrics): 1 accepts the
-     * pattern; 0 asks for choose_panels again (the extension remembers why and bounds the rounds). */
-    int (*accept_pattern)(void *user, const pz_pattern *pattern, const pz_metrics *metrics);
+    /* Called after each flattening of the panels choose_panels gave, with its pattern points (uv, 2 per
+     * pattern vertex, borrowed) and rest-pose metrics: 1 accepts the pattern; 0 asks for choose_panels
+     * again (the extension remembers why and bounds the rounds). */
+    int (*accept_pattern)(void *user, const pz_pattern *pattern, const double *uv, const pz_metrics *metrics);
     double strain_limit;                 /* the textile back-end's strain goal (run: --max-strain), 0 = none */
     /* Called once the pattern exists, before any export: the mirror panel of each panel (may return NULL)
      * and the layout curves as garment vertex polylines for garment.glb (may leave them empty). */
     const int32_t *(*panel_mirror)(void *user, const pz_pattern *pattern);
     void (*layout_curves)(void *user, const pz_pattern *pattern, const int32_t **vertices, const int32_t **offsets,
                           int32_t *count);
-    /* Adds the command's own keys to report.json (root) and to the text summary. */
+    /* Adds the command's own keys to report.json (root) and to the text summary; uv are the final
+     * pattern points (2 per pattern vertex, pieces laid out side by side, borrowed). */
     int (*extend_report)(void *user, cJSON *root, const pz_mesh *garment, const pz_pattern *pattern,
-                         const pz_metrics *metrics);
+                         const double *uv, const pz_metrics *metrics);
     void (*print_summary)(void *user);
     int32_t extra_file_count;
     const pz_flatten_extra_file *extra_files;

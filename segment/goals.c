@@ -478,6 +478,24 @@ static pz_status panel_mesh(panel_walk *w, pz_mesh **out, uint8_t **slits_out, p
                3 * sizeof(double));
     }
     mesh->unit_scale = w->mesh->unit_scale;
+    /* The extra poses too: a panel meets the strain goal only when it does in every pose. */
+    int32_t poses = w->mesh->pose_count, garment_vertices = w->mesh->vertex_count;
+    if (poses > 0 && w->mesh->poses) {
+        mesh->poses = malloc((size_t)poses * (size_t)vertex_count * 3 * sizeof(double) + 1);
+        if (!mesh->poses) {
+            free(vertex_of);
+            pz_mesh_free(&mesh);
+            return pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
+        }
+        mesh->pose_count = poses;
+        for (int32_t c = 0; c < 3 * w->count; ++c) {
+            int32_t v = vertex_of[find_root(w->corner_root, c)];
+            int32_t g = w->topology->faces[3 * w->face_ids[c / 3] + c % 3];
+            for (int32_t k = 0; k < poses; ++k)
+                memcpy(mesh->poses + 3 * ((size_t)k * vertex_count + v),
+                       w->mesh->poses + 3 * ((size_t)k * garment_vertices + g), 3 * sizeof(double));
+        }
+    }
     free(vertex_of);
     int32_t slit_count = 0;
     for (int32_t c = 0; c < 3 * w->count; ++c) {
@@ -557,14 +575,24 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
         textile.strain_limit = options->max_strain;
         textile.grain_given = 1;
         memcpy(textile.grain, options->grain, sizeof textile.grain);
+        textile.use_poses = pattern->mesh->pose_count > 0;
         status = pz_param_textile(pattern, &textile, uv, NULL, ctx);
     }
     if (!status)
         status = pz_metrics_compute(pattern, uv, 0, NULL, &metrics, ctx);
+    /* The strain is the worst over the rest pose and every extra pose (the flips do not depend on it). */
+    double worst_strain = metrics ? metrics->max_abs_strain : 0;
+    for (int32_t pose = 1; !status && pose <= pattern->mesh->pose_count; ++pose) {
+        pz_metrics *posed = NULL;
+        status = pz_metrics_compute(pattern, uv, pose, NULL, &posed, ctx);
+        if (!status)
+            worst_strain = fmax(worst_strain, posed->max_abs_strain);
+        pz_metrics_free(&posed);
+    }
     if (!status) {
         out->darts = pattern->dart_count;
         out->min_dart_opening_deg = min_dart_opening(pattern, uv);
-        out->max_abs_strain = metrics->max_abs_strain;
+        out->max_abs_strain = worst_strain;
         int32_t crossings = 0;
         for (int32_t p = 0; p < metrics->panel_count; ++p) {
             out->flipped_triangles += metrics->panels[p].flipped_triangles;
@@ -693,7 +721,7 @@ void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *optio
     if (result->failures & PZ_GOAL_CORNERS)
         APPEND("%d corners > %d", (int)result->corners, (int)max_corners);
     if (result->failures & PZ_GOAL_STRAIN)
-        APPEND("strain %.4f > %.4f", result->max_abs_strain, max_strain);
+        APPEND("strain %.3g > %g", result->max_abs_strain, max_strain);
     if (result->failures & PZ_GOAL_NOT_INJECTIVE) {
         if (result->flipped_triangles > 0)
             APPEND("%d flipped triangles", (int)result->flipped_triangles);

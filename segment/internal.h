@@ -11,7 +11,11 @@
 
 #include "segment/segment.h"
 
-/* One inserted path: its copy and whether it is a sketch (never removed). */
+/* Why an inserted path is never removed (seg_path.sketch, seg_segment.sketch: bits). */
+#define SEG_SKETCH 1   /* a sketched curve */
+#define SEG_SEEDED 2   /* options->seed_cuts (its path is empty: the edges are given, not traced) */
+
+/* One inserted path: its copy and whether it is never removed (SEG_SKETCH | SEG_SEEDED bits, 0: removable). */
 typedef struct seg_path {
     pz_trace_path path;
     int sketch;
@@ -35,8 +39,8 @@ typedef struct seg_segment {
     int32_t *edges;        /* edge_count, in walking order */
     int32_t *vertices;     /* edge_count + 1 (closed: last == first) */
     int closed;
-    int32_t owner;         /* the inserted path that cut its first edge (insertion order), -1 unknown */
-    int sketch;
+    int32_t owner;         /* the latest inserted path that cut one of its edges (insertion order), -1 unknown */
+    int sketch;            /* SEG_SKETCH | SEG_SEEDED bits of its edges' paths: never removed when non-zero */
 } seg_segment;
 
 typedef struct seg_segments {

@@ -1006,10 +1006,32 @@ static pz_status insert_sketches(seg_layout *layout, pz_ctx *ctx)
         pz_status status = pz_trace_snap_polyline(layout->graph, layout->mesh, layout->topology, points,
                                                   closed ? n - 1 : n, closed, 0, name, &path, ctx);
         if (!status)
-            status = add_path(layout, &path, 1, ctx);
+            status = add_path(layout, &path, SEG_SKETCH, ctx);
         pz_trace_path_clear(&path);
         if (status)
             return status;
+    }
+    return PZ_OK;
+}
+
+/* options->seed_cuts: cut from the start, owned by one empty path marked SEG_SEEDED (never removed). */
+static pz_status insert_seeds(seg_layout *layout, pz_ctx *ctx)
+{
+    const uint8_t *seeds = layout->options->seed_cuts;
+    if (!seeds)
+        return PZ_OK;
+    pz_trace_path empty;
+    memset(&empty, 0, sizeof empty);
+    pz_status status = add_path(layout, &empty, SEG_SEEDED, ctx);
+    if (status)
+        return status;
+    int32_t index = layout->path_count - 1;
+    for (int32_t e = 0; e < layout->topology->edge_count; ++e) {
+        if (!seeds[e] || layout->edge_cut[e])
+            continue;
+        layout->edge_cut[e] = 1;
+        layout->edge_owner[e] = index;
+        layout->labels_valid = 0;
     }
     return PZ_OK;
 }
@@ -1202,8 +1224,8 @@ static pz_status make_curves(const seg_layout *layout, pz_segment_result *result
             c->vertices[j] = tip_last && !tip_first ? s->vertices[n - 1 - j] : s->vertices[j];
         /* A sketched curve that ends inside a panel is a dart of the pattern all the same
          * (pz_pattern_build makes one of every slit): kind dart, marked sketched. */
-        c->sketched = s->sketch;
-        c->kind = (tip_first || tip_last) ? PZ_LAYOUT_DART : s->sketch ? PZ_LAYOUT_SKETCH : PZ_LAYOUT_SEAM;
+        c->sketched = (s->sketch & SEG_SKETCH) != 0;
+        c->kind = (tip_first || tip_last) ? PZ_LAYOUT_DART : c->sketched ? PZ_LAYOUT_SKETCH : PZ_LAYOUT_SEAM;
         if (c->kind == PZ_LAYOUT_DART) {
             ++result->dart_count;
             int32_t face = pz_he_face(t->edge_halfedge[2 * s->edges[0]]);
@@ -1403,6 +1425,8 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
     result->graph_ms = 1e3 * (pz_seconds() - start);
     if (!status)
         status = insert_sketches(&layout, ctx);
+    if (!status)
+        status = insert_seeds(&layout, ctx);
     if (!status)
         status = seg_label_panels(&layout, ctx);
     if (!status)

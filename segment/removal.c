@@ -102,8 +102,8 @@ static int walk_segment(const seg_layout *layout, int32_t v, int32_t e, uint8_t 
         int32_t owner = layout->edge_owner[e];
         if (owner > out->owner)
             out->owner = owner;
-        if (owner >= 0 && layout->paths[owner].sketch)
-            out->sketch = 1;
+        if (owner >= 0)
+            out->sketch |= layout->paths[owner].sketch;
         out->edges[out->edge_count++] = e;
         v = other_end(layout, e, v);
         out->vertices[out->edge_count] = v;

@@ -163,6 +163,11 @@ typedef struct pz_segment_options {
      * flattening still aims at S). 0 by default; panelize run raises it in its verdict rounds, where
      * the joint flattening showed the evaluations too optimistic for this garment. */
     double strain_margin;
+    /* Edges cut from the start and never removed (flags over the topology's edges, may be NULL), like
+     * sketches: every panel of a layout that has these cuts is a union of this layout's panels, so this
+     * layout has at least as many. panelize run passes the final cuts of its looser goals here
+     * (docs/segment.md, "Monotone panel counts"). */
+    const uint8_t *seed_cuts;
     /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
      * each insertion, removal and dart with the current panel count and the worst strain among the
      * current panels that have been flattened (0 when none has). */

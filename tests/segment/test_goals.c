@@ -118,7 +118,13 @@ static void test_hemisphere(void)
     CHECK(tight.corners == 0, "a hemisphere has %d corners", (int)tight.corners);
     char text[256];
     pz_goal_describe(&tight, &strict, text, sizeof text);
-    CHECK(strstr(text, "strain") != NULL && strstr(text, "> 0.0100") != NULL, "describe: %s", text);
+    CHECK(strstr(text, "strain 0.0") != NULL && strstr(text, "> 0.01") != NULL, "describe: %s", text);
+    /* S = 0: a tiny strain keeps its digits ("strain 0.0000 > 0.0000" told nothing). */
+    pz_goal_result tiny = {PZ_GOAL_STRAIN, 0, 1, 3.25e-5, 0, 0, -1};
+    pz_goal_options zero = strict;
+    zero.max_strain = 0;
+    pz_goal_describe(&tiny, &zero, text, sizeof text);
+    CHECK(strcmp(text, "strain 3.25e-05 > 0") == 0, "describe at S = 0: '%s'", text);
     pz_goal_result relaxed = evaluate_all(mesh, topology, NULL, &loose);
     CHECK(relaxed.failures == 0, "hemisphere at S = 0.5: failures %u (strain %g)", relaxed.failures,
           relaxed.max_abs_strain);
