@@ -14,9 +14,11 @@
  * `flatten` wrote (its garment.obj: panels and pattern from its vt), with the
  * default options or `--gap MM` (the figures of docs/marker.md).
  * One line per measurement:
- *   bench_marker case=... step=... ms=... [passes=... pieces=... length_mm=... efficiency=...] load=...
- * Timings are wall clock of one run; the load is the 1-minute load average
- * (2 cores: figures taken above 1 are not comparable).
+ *   bench_marker case=... step=... ms=... [cpu_ms=... passes=... pieces=... length_mm=... efficiency=...] load=...
+ * Timings are wall clock of one run, and for the marker also its CPU time
+ * (cpu_ms: comparable under load, wall clock is not); the load is the
+ * 1-minute load average (2 cores: wall clock taken above 1 is inflated).
+ * PZ_BENCH_MARKER_SVG=DIR writes every marker as DIR/<case>.svg.
  * Usage: bench_marker [FACES] | bench_marker [--gap MM] PATTERN.obj...
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -27,14 +29,46 @@
 
 #include "bench_util.h"
 
+#include <time.h>
+
 static pz_ctx ctx;
 
-static void print_marker(const char *name, const pz_pieces *pieces, const pz_marker *marker)
+/* pz_marker_build, and the CPU time it took (ms): wall clock is unreliable on a shared machine. */
+static pz_marker *build_marker(const pz_pieces *pieces, const pz_export_options *options, double *cpu_ms)
 {
-    printf("bench_marker case=%s step=marker ms=%.1f passes=%d pieces=%d placements=%d length_mm=%.1f efficiency=%.4f "
-           "load=%.2f\n",
-           name, marker->ms, (int)marker->passes, (int)pieces->piece_count, (int)marker->placement_count, marker->length_mm,
-           marker->efficiency, bench_load_average());
+    pz_marker *marker = NULL;
+    clock_t start = clock();
+    REQUIRE_OK(pz_marker_build(pieces, options, &marker, &ctx), ctx);
+    *cpu_ms = (double)(clock() - start) * 1000.0 / CLOCKS_PER_SEC;
+    return marker;
+}
+
+static void print_marker(const char *name, const pz_pieces *pieces, const pz_marker *marker, double cpu_ms)
+{
+    printf("bench_marker case=%s step=marker ms=%.1f cpu_ms=%.1f passes=%d pieces=%d placements=%d length_mm=%.1f "
+           "efficiency=%.4f load=%.2f\n",
+           name, marker->ms, cpu_ms, (int)marker->passes, (int)pieces->piece_count, (int)marker->placement_count,
+           marker->length_mm, marker->efficiency, bench_load_average());
+}
+
+/* With PZ_BENCH_MARKER_SVG=DIR in the environment: DIR/<case>.svg, to look at the marker. */
+static void save_svg(const char *name, const pz_pieces *pieces, const pz_marker *marker)
+{
+    const char *dir = getenv("PZ_BENCH_MARKER_SVG");
+    if (!dir)
+        return;
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.svg", dir, name);
+    for (char *c = path + strlen(dir) + 1; *c; ++c)
+        if (*c == '/')
+            *c = '_';
+    FILE *file = fopen(path, "w");
+    REQUIRE(file, "cannot write %s", path);
+    pz_export_options options;
+    pz_export_options_default(&options);
+    pz_export_inputs inputs = {.pieces = pieces, .marker = marker, .options = &options};
+    REQUIRE_OK(pz_export_write_marker_svg(file, &inputs, path, &ctx), ctx);
+    fclose(file);
 }
 
 static void time_writer(const char *name, const char *step, pz_export_writer writer, const pz_export_inputs *inputs)
@@ -61,7 +95,12 @@ static void bench_bodice(int32_t faces, int32_t panels, int writers)
     snprintf(name, sizeof name, "bodice-%dK-%dpanels", (int)(fixture.pattern->mesh->face_count / 1000), (int)panels);
     printf("bench_marker case=%s step=pieces+marker ms=%.1f load=%.2f\n", name, (pz_seconds() - start) * 1000.0,
            bench_load_average());
-    print_marker(name, fixture.pieces, fixture.marker);
+    double cpu_ms = 0; /* the marker again, alone, for its CPU time (deterministic: the same marker) */
+    pz_marker *again = build_marker(fixture.pieces, &fixture.options, &cpu_ms);
+    CHECK(again->length_mm == fixture.marker->length_mm, "%s: two builds differ", name);
+    pz_marker_free(&again);
+    print_marker(name, fixture.pieces, fixture.marker, cpu_ms);
+    save_svg(name, fixture.pieces, fixture.marker);
     cJSON *report = cJSON_CreateObject();
     cJSON_AddItemToObject(report, "marker", pz_marker_report_json(fixture.marker));
     pz_export_inputs inputs = fixture.inputs;
@@ -111,9 +150,10 @@ static void bench_tshirt(const char *data)
         many.pieces[i] = pieces->pieces[i % pieces->piece_count];
         many.pieces[i].mirror_piece = -1, many.pieces[i].mirrored = 0, many.pieces[i].cut_quantity = 1;
     }
-    pz_marker *marker = NULL;
-    REQUIRE_OK(pz_marker_build(&many, &options, &marker, &ctx), ctx);
-    print_marker("tshirt-x5", &many, marker);
+    double cpu_ms = 0;
+    pz_marker *marker = build_marker(&many, &options, &cpu_ms);
+    print_marker("tshirt-x5", &many, marker, cpu_ms);
+    save_svg("tshirt-x5", &many, marker);
     pz_marker_free(&marker);
     free(many.pieces);
     pz_pieces_free(&pieces);
@@ -136,14 +176,15 @@ static void bench_pattern_obj(const char *path, double gap_mm)
         options.gap_mm = gap_mm;
     pz_pieces *pieces = NULL;
     REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, NULL, NULL, &pieces, &ctx), ctx);
-    pz_marker *marker = NULL;
-    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    double cpu_ms = 0;
+    pz_marker *marker = build_marker(pieces, &options, &cpu_ms);
     char name[256];
     snprintf(name, sizeof name, "%s", path);
     for (char *c = name; *c; ++c)
         if (*c == ' ')
             *c = '_';
-    print_marker(name, pieces, marker);
+    print_marker(name, pieces, marker, cpu_ms);
+    save_svg(name, pieces, marker);
     pz_marker_free(&marker);
     pz_pieces_free(&pieces);
     fixture_free(&f);

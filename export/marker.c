@@ -3,7 +3,8 @@
  * (x across the fabric width, y along its length), and marker.svg.
  *
  * Method (docs/marker.md): raster bottom-left fill over the true shapes,
- * with a search over the order in which pieces are placed.
+ * with a search over the order in which pieces are placed, then a column
+ * fill at fixed lengths below the best for short markers.
  *  - Grid: square cells of `resolution` mm (fabric width / 1000, at least
  *    1 mm). Each piece copy, in each allowed orientation (0 and 180 degrees:
  *    the grain stays true; the second copy of a Cut-2 piece mirrored x -> -x
@@ -24,13 +25,22 @@
  *    costs O(obstacles in it), not O(width). Before a row is tried, eight
  *    probe rows of the shape must meet fabric rows with a long enough free
  *    stretch; maxima over blocks of 32 rows let a probe skip a block at once.
+ *    A position is checked row by row in a strided order (widest row, then
+ *    every 64th, 32nd, ...): a blocked one is found blocked after a few rows.
  *    Placing a shape mends only the stretches around its runs.
  *  - Order: greedy passes over four fixed orders (area, height, width,
- *    large and small alternating), then a local search (swap two pieces,
- *    move one, or pin one's rotation) from a fixed seed, keeping the
- *    shortest marker (ties: the lower sum of the units' tops). The budget is
- *    counted in grid_find's steps, not timed: deterministic, no threads, no
- *    clock; a marker of many pieces on a long fabric gets fewer passes.
+ *    large and small alternating), then walks of a local search (swap two
+ *    pieces, move one, or pin one's rotation), each new walk from a random
+ *    order once the last one stalls, keeping the shortest marker (ties: the
+ *    lower sum of the units' tops).
+ *  - Column fill (markers up to two fabric widths long): the same machinery
+ *    on the transposed fabric fills across the width under a fixed length L
+ *    (leftmost, then lowest), so the marker ends level at L where the
+ *    bottom-left fill leaves a ragged top; L steps down below the best
+ *    marker while a local search finds orders that fit the width.
+ *  - Budgets are counted in grid_find's steps and in passes, not timed:
+ *    deterministic, no threads, no clock, a fixed xorshift seed; a marker of
+ *    many pieces on a long fabric gets fewer passes.
  * Memory: the shapes' runs (O(cells on their rows)), three bytes per fabric
  * cell (occupancy, 16-bit stretch). Fails with PZ_ERR_DATA for a piece wider than the fabric
  * or with a cut-line coordinate out of range, PZ_ERR_USAGE for a fabric
@@ -43,17 +53,30 @@
 #include "export/xml_text.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 /* Grid cells across the fabric: finer wastes less fabric to the raster, coarser is faster. */
 #define CELLS_ACROSS 1000.0
-/* The local search's budget, counted in grid_find's steps (rows and positions tried, about 10-50 ns each):
- * deterministic, unlike a clock. At most SEARCH_MAX_PASSES passes in all ... */
+/* The local search's budget, counted in grid_find's steps (rows and positions tried, about 100-300 ns each):
+ * deterministic, unlike a clock. At most SEARCH_MAX_PASSES passes in all, fewer for few pieces (a few orders
+ * cover them: SEARCH_PASSES_PER_PIECE per piece beyond the first, on top of the fixed orders) ... */
 #define SEARCH_WORK 3000000
-#define SEARCH_MAX_PASSES 150
-/* ... and it stops after this many passes in a row that did not shorten the best marker. */
-#define SEARCH_STALL 60
+#define SEARCH_MAX_PASSES 1000
+#define SEARCH_PASSES_PER_PIECE 100
+/* ... in walks: a walk that has not improved on its own best for this many passes starts again from a random
+ * order (the landscape is rugged: independent walks find more than one long one). */
+#define SEARCH_STALL 100
+/* The column fill (search_columns): only for markers up to this many fabric widths long (a ragged top costs
+ * little of a long marker, and the transposed grid is as wide as the marker is long); its own budget of steps
+ * and passes, the passes it may spend on one length without fitting the fabric's width, and how far below the
+ * best length it tries next (a fraction of it). */
+#define COLUMN_MAX_WIDTHS 2.0
+#define COLUMN_WORK 1000000
+#define COLUMN_MAX_PASSES 150
+#define COLUMN_STALL 60
+#define COLUMN_STEP 0.005
 
 /* ------------------------------------------------------------------ transforms */
 
@@ -83,12 +106,14 @@ typedef struct shape {
     int32_t widest_row;    /* the row of the longest run ... */
     int32_t widest;        /* ... and its length - 1 (-1 for an empty shape) */
     int32_t probe_row[PROBES], probe_width[PROBES]; /* rows spread over the height and their longest run - 1 */
+    int32_t *check_order;  /* height: the rows in the order grid_blocked checks them (widest first, then strided) */
 } shape;
 
 static void shape_clear(shape *s)
 {
     free(s->row_start);
     free(s->runs);
+    free(s->check_order);
     memset(s, 0, sizeof *s);
 }
 
@@ -102,7 +127,8 @@ static int shape_from_cells(shape *s, const uint8_t *cells, int32_t width, int32
     s->width = width, s->height = height, s->widest = -1;
     s->row_start = malloc(((size_t)height + 1) * sizeof(int32_t));
     s->runs = malloc((2 * count + 1) * sizeof(int32_t));
-    if (!s->row_start || !s->runs) {
+    s->check_order = malloc(((size_t)height + 1) * sizeof(int32_t));
+    if (!s->row_start || !s->runs || !s->check_order) {
         shape_clear(s);
         return 0;
     }
@@ -123,6 +149,16 @@ static int shape_from_cells(shape *s, const uint8_t *cells, int32_t width, int32
         }
     }
     s->row_start[height] = run;
+    /* Check order: the widest row, then every 64th row, every 32nd, ... (each row once). An obstacle spans many
+     * rows, so a blocked position is found blocked after a few rows instead of after a row-by-row walk from the
+     * bottom: the answer is the same, found sooner. */
+    int32_t filled = 0;
+    if (height > 0)
+        s->check_order[filled++] = s->widest_row;
+    for (int32_t stride = 64; stride >= 1; stride /= 2)
+        for (int32_t r = 0; r < height; r += stride)
+            if (r != s->widest_row && (stride == 64 || r % (2 * stride) != 0))
+                s->check_order[filled++] = r;
     for (int k = 0; k < PROBES; ++k) {
         int32_t r = k == 0 ? s->widest_row : (int32_t)((int64_t)(height - 1) * (k - 1) / (PROBES - 2));
         s->probe_row[k] = r, s->probe_width[k] = -1;
@@ -331,22 +367,50 @@ static int unit_pair(const raster *raster, const unit *left, const unit *right, 
     return ok;
 }
 
-/* Everything one piece may be placed as: its copies in both rotations, and for a Cut-2 piece the pairs. */
+/*
+ * The unit seen with x and y swapped, for the column fill (search_columns): the cells transposed (square cells,
+ * so the raster stays conservative), the extent swapped; the members keep their fabric offsets (place_best swaps
+ * the grid position back). 0 when out of memory.
+ */
+static int unit_transpose(const unit *in, unit *out)
+{
+    memset(out, 0, sizeof *out);
+    const shape *s = &in->shape;
+    uint8_t *cells = calloc((size_t)s->width * (size_t)s->height + 1, 1);
+    if (!cells)
+        return 0;
+    for (int32_t y = 0; y < s->height; ++y)
+        for (int32_t i = s->row_start[y]; i < s->row_start[y + 1]; ++i)
+            for (int32_t x = s->runs[2 * i]; x <= s->runs[2 * i + 1]; ++x)
+                cells[(size_t)x * (size_t)s->height + (size_t)y] = 1;
+    int ok = shape_from_cells(&out->shape, cells, s->height, s->width);
+    free(cells);
+    out->member_count = in->member_count;
+    memcpy(out->members, in->members, sizeof out->members);
+    out->lo[0] = in->lo[1], out->lo[1] = in->lo[0];
+    out->hi[0] = in->hi[1], out->hi[1] = in->hi[0];
+    return ok;
+}
+
+/* Everything one piece may be placed as: its copies in both rotations, and for a Cut-2 piece the pairs, each
+ * also transposed ([1]) for the column fill. */
 typedef struct demand {
     int32_t piece;
     int copies;                  /* 1, or 2 for a Cut-2 piece */
-    unit singles[2][2];          /* [copy][0: 0 degrees, 1: 180] */
-    unit pairs[4];               /* copies == 2: (copy 0, copy 1) turned (0,0) (0,180) (180,0) (180,180) */
+    unit singles[2][2][2];       /* [transposed][copy][0: 0 degrees, 1: 180] */
+    unit pairs[2][4];            /* copies == 2: [transposed](copy 0, copy 1) turned (0,0) (0,180) (180,0) (180,180) */
     double keys[3];              /* area, height, width: the fixed orders */
 } demand;
 
 static void demand_clear(demand *d)
 {
-    for (int c = 0; c < 2; ++c)
-        for (int r = 0; r < 2; ++r)
-            unit_clear(&d->singles[c][r]);
-    for (int k = 0; k < 4; ++k)
-        unit_clear(&d->pairs[k]);
+    for (int t = 0; t < 2; ++t) {
+        for (int c = 0; c < 2; ++c)
+            for (int r = 0; r < 2; ++r)
+                unit_clear(&d->singles[t][c][r]);
+        for (int k = 0; k < 4; ++k)
+            unit_clear(&d->pairs[t][k]);
+    }
 }
 
 static int demand_build(const raster *raster, const pz_pieces *pieces, int32_t index, demand *out)
@@ -360,10 +424,12 @@ static int demand_build(const raster *raster, const pz_pieces *pieces, int32_t i
     out->keys[2] = piece->bbox_max[0] - piece->bbox_min[0];
     for (int c = 0; c < out->copies; ++c)
         for (int r = 0; r < 2; ++r)
-            if (!unit_single(raster, piece, index, c, 180 * r, &out->singles[c][r]))
+            if (!unit_single(raster, piece, index, c, 180 * r, &out->singles[0][c][r]) ||
+                !unit_transpose(&out->singles[0][c][r], &out->singles[1][c][r]))
                 return 0;
     for (int k = 0; out->copies == 2 && k < 4; ++k)
-        if (!unit_pair(raster, &out->singles[0][k / 2], &out->singles[1][k % 2], &out->pairs[k]))
+        if (!unit_pair(raster, &out->singles[0][0][k / 2], &out->singles[0][1][k % 2], &out->pairs[0][k]) ||
+            !unit_transpose(&out->pairs[0][k], &out->pairs[1][k]))
             return 0;
     return 1;
 }
@@ -388,6 +454,8 @@ typedef struct grid {
     int32_t *longest_run;  /* rows: the longest free run of each row */
     int32_t *block_longest; /* rows / ROW_BLOCK: the longest free run of each block of rows */
     int64_t work;          /* rows and positions tried by grid_find: the search's budget counts them */
+    int transposed;        /* 1: the column fill's grid, x along the fabric's length (search_columns) */
+    double fabric_width_mm; /* transposed: the fabric's width, the most a pass may use along the grid's y */
 } grid;
 
 static void grid_free(grid *g)
@@ -448,30 +516,55 @@ static void grid_reset(grid *g)
     g->dirty_rows = 0;
 }
 
+/* The last index below `before` whose byte is not `value`, or -1: eight bytes at a time (long free or occupied
+ * stretches are the common case on a fabric row). */
+static int32_t last_byte_not(const uint8_t *row, int32_t before, uint8_t value)
+{
+    const uint64_t all = 0x0101010101010101ull * value;
+    int32_t x = before;
+    while (x >= 8) {
+        uint64_t word;
+        memcpy(&word, row + x - 8, 8);
+        if (word != all)
+            break;
+        x -= 8;
+    }
+    while (--x >= 0 && row[x] == value) {
+    }
+    return x;
+}
+
 /*
- * Marks columns [first, last] of row y occupied and mends the stretch counts
- * around them: cells in the run and to its left, back to where the
- * stretch that ends at the run began, and the row's longest free stretch
- * (one step per stretch). Cells right of the run keep their counts.
+ * Marks columns [first, last] of row y (free until now) occupied and mends
+ * the stretch counts around them: cells in the run and to its left, back to
+ * where the stretch that ends at the run began. The row's longest free
+ * stretch is walked again (one step per stretch) only when the stretch the
+ * run cut into was the longest. Cells right of the run keep their counts.
  */
 static void grid_fill_run(grid *g, int32_t y, int32_t first, int32_t last)
 {
     uint8_t *row = g->occupied + (size_t)y * (size_t)g->columns;
     stretch *run = g->free_run + (size_t)y * (size_t)g->columns;
+    int32_t start = last_byte_not(row, first, 0) + 1; /* the free stretch the run cuts into begins here */
+    int32_t cut = run[start];                         /* and was this long */
     memset(row + first, 1, (size_t)(last - first + 1));
-    int32_t count = last + 1 < g->columns && run[last + 1] < 0 ? run[last + 1] : 0;
-    for (int32_t x = last; x >= first; --x)
-        run[x] = (stretch)--count;
-    /* Left of the run: an occupied stretch grows, a free one now ends at `first`. */
-    int32_t x = first - 1;
-    if (x >= 0 && row[x])
-        for (; x >= 0 && row[x]; --x)
-            run[x] = (stretch)--count;
+    /* The occupied stretch through the run ends (exclusive) at `end`: an occupied cell counts -(end - x). */
+    int32_t end = last + 1;
+    if (end < g->columns && run[end] < 0)
+        end -= run[end];
+    for (int32_t x = first; x <= last; ++x)
+        run[x] = (stretch)(x - end);
+    /* Left of the run: a free stretch now ends at `first`, or an occupied one grows. */
+    if (start < first)
+        for (int32_t x = start; x < first; ++x)
+            run[x] = (stretch)(first - x);
     else
-        for (count = 0; x >= 0 && !row[x]; --x)
-            run[x] = (stretch)++count;
+        for (int32_t x = last_byte_not(row, first, 1) + 1; x < first; ++x)
+            run[x] = (stretch)(x - end);
+    if (cut < g->longest_run[y])
+        return; /* the longest stretch is elsewhere, untouched */
     int32_t longest = 0;
-    for (x = 0; x < g->columns; x += run[x] > 0 ? run[x] : -run[x])
+    for (int32_t x = 0; x < g->columns; x += run[x] > 0 ? run[x] : -run[x])
         longest = run[x] > longest ? run[x] : longest;
     g->longest_run[y] = longest;
 }
@@ -485,10 +578,8 @@ static void grid_fill_run(grid *g, int32_t y, int32_t first, int32_t last)
  */
 static int32_t grid_blocked(const grid *g, const shape *s, int32_t x, int32_t y)
 {
-    for (int32_t k = -1; k < s->height; ++k) {
-        int32_t r = k < 0 ? s->widest_row : k;
-        if (k == s->widest_row)
-            continue;
+    for (int32_t k = 0; k < s->height; ++k) {
+        int32_t r = s->check_order[k];
         if (y + r >= g->rows)
             continue; /* rows above the allocated ones are empty */
         const stretch *run = g->free_run + (size_t)(y + r) * (size_t)g->columns + x;
@@ -501,6 +592,37 @@ static int32_t grid_blocked(const grid *g, const shape *s, int32_t x, int32_t y)
         }
     }
     return 0;
+}
+
+/* The leftmost column in [x_lo, x_hi] of row y where shape s fits; -1 when none (or when a probe row shows that
+ * none can). *skip_to: past y, the first row worth trying next (y + 1 unless a block of rows can be skipped). */
+static int32_t grid_row_fit(grid *g, const shape *s, int32_t y, int32_t x_lo, int32_t x_hi, int32_t *skip_to)
+{
+    ++g->work;
+    /* A probe row needs a fabric row with a free run as long as its own: a block of fabric rows none of which
+     * has one moves y past that block at once, a single such row moves y by one. */
+    int hopeless = 0;
+    *skip_to = y + 1;
+    for (int k = 0; k < PROBES; ++k) {
+        int32_t at = y + s->probe_row[k];
+        if (at >= g->rows)
+            continue;
+        if (g->block_longest[at / ROW_BLOCK] <= s->probe_width[k]) {
+            int32_t past = (at / ROW_BLOCK + 1) * ROW_BLOCK - s->probe_row[k];
+            *skip_to = past > *skip_to ? past : *skip_to;
+        }
+        hopeless |= g->longest_run[at] <= s->probe_width[k];
+    }
+    if (hopeless || *skip_to > y + 1)
+        return -1;
+    for (int32_t x = x_lo; x <= x_hi;) {
+        int32_t next = grid_blocked(g, s, x, y);
+        ++g->work;
+        if (next == 0)
+            return x;
+        x = next > x ? next : x + 1;
+    }
+    return -1;
 }
 
 /* The lowest, then leftmost, grid cell where the unit fits with its cut line inside the fabric; 0 if none. */
@@ -519,39 +641,15 @@ static int grid_find(grid *g, const unit *u, int32_t *x_out, int32_t *y_out)
     if (x_lo > x_hi || u->shape.widest < 0)
         return 0;
     const shape *s = &u->shape;
-    for (int32_t y = y_lo;; ++y) {
-        ++g->work;
-        /* A probe row needs a fabric row with a free run as long as its own: a block of fabric rows none of
-         * which has one moves y past that block at once, a single such row moves y by one. */
-        int32_t skip_to = y, hopeless = 0;
-        for (int k = 0; k < PROBES; ++k) {
-            int32_t at = y + s->probe_row[k];
-            if (at >= g->rows)
-                continue;
-            if (g->block_longest[at / ROW_BLOCK] <= s->probe_width[k]) {
-                int32_t past = (at / ROW_BLOCK + 1) * ROW_BLOCK - s->probe_row[k];
-                skip_to = past > skip_to ? past : skip_to;
-            }
-            hopeless |= g->longest_run[at] <= s->probe_width[k];
+    for (int32_t y = y_lo; y <= g->rows;) {
+        int32_t skip_to, x = grid_row_fit(g, s, y, x_lo, x_hi, &skip_to);
+        if (x >= 0) {
+            *x_out = x, *y_out = y;
+            return 1;
         }
-        if (skip_to > y) {
-            y = skip_to - 1;
-            continue;
-        }
-        if (hopeless)
-            continue;
-        for (int32_t x = x_lo; x <= x_hi;) {
-            int32_t next = grid_blocked(g, s, x, y);
-            ++g->work;
-            if (next == 0) {
-                *x_out = x, *y_out = y;
-                return 1;
-            }
-            x = next > x ? next : x + 1;
-        }
-        if (y >= g->rows)
-            return 0; /* not reached: a free row takes any shape that fits across */
+        y = skip_to;
     }
+    return 0; /* not reached: a free row takes any shape that fits across */
 }
 
 static int grid_occupy(grid *g, const shape *s, int32_t x, int32_t y)
@@ -574,9 +672,11 @@ static int grid_occupy(grid *g, const shape *s, int32_t x, int32_t y)
 
 /* ------------------------------------------------------------------ one greedy pass */
 
-/* What a pass achieved: the marker's length (the highest cut-line point) and the sum of the units' tops. */
+/* What a pass achieved: the marker's length (the highest cut-line point along the grid's y), the sum of the
+ * units' tops, and the farthest cut-line point across (the grid's x). On a transposed grid, length is how much
+ * of the fabric's width the pass used and across the marker's true length. */
 typedef struct pass_score {
-    double length, tops;
+    double length, tops, across;
 } pass_score;
 
 static int score_better(pass_score a, pass_score b)
@@ -595,6 +695,8 @@ static int place_best(grid *g, const unit *candidates, int count, pz_marker_plac
     double best_top = INFINITY;
     for (int k = 0; k < count; ++k) {
         int32_t x, y;
+        if (g->transposed && candidates[k].hi[1] - candidates[k].lo[1] > g->fabric_width_mm)
+            continue; /* wider than the fabric: a pair that must go as two copies */
         if (!grid_find(g, &candidates[k], &x, &y))
             continue;
         double top = (y - g->margin) * g->raster.resolution + candidates[k].hi[1];
@@ -607,21 +709,24 @@ static int place_best(grid *g, const unit *candidates, int count, pz_marker_plac
     const unit *u = &candidates[best];
     if (!grid_occupy(g, &u->shape, best_x, best_y))
         return 0;
+    double at[2] = {(best_x - g->margin) * g->raster.resolution, (best_y - g->margin) * g->raster.resolution};
     for (int m = 0; m < u->member_count; ++m) {
         pz_marker_placement placement = u->members[m];
-        placement.offset[0] += (best_x - g->margin) * g->raster.resolution;
-        placement.offset[1] += (best_y - g->margin) * g->raster.resolution;
+        placement.offset[0] += at[g->transposed], placement.offset[1] += at[!g->transposed];
         out[(*out_count)++] = placement;
     }
     score->length = fmax(score->length, best_top);
     score->tops += best_top;
+    score->across = fmax(score->across, at[0] + u->hi[0]);
     return 1;
 }
 
 /*
- * One greedy pass: placements into out (count written). order[i] = demand * 3 + turn: turn 0 takes the
- * candidate whose top ends lowest, 1 and 2 the first or second half of the candidates only (copy 0 at 0 or
- * 180 degrees) unless none of those fits.
+ * One greedy pass on grid g (the fabric, or its transpose for the column fill): placements into out (count
+ * written, fabric coordinates either way). order[i] = demand * 3 + turn: turn 0 takes the candidate whose top
+ * ends lowest, 1 and 2 the first or second half of the candidates only (copy 0 at 0 or 180 degrees) unless
+ * none of those fits. On a transposed grid a unit that fits nowhere (taller than the length tried) ends the
+ * pass with an infinite score.
  */
 static pz_status nest_pass(grid *g, const pz_pieces *pieces, const demand *demands, const int32_t *order,
                            int32_t count, pz_marker_placement *out, int32_t *out_count, pass_score *score,
@@ -629,22 +734,27 @@ static pz_status nest_pass(grid *g, const pz_pieces *pieces, const demand *deman
 {
     grid_reset(g);
     *out_count = 0;
-    *score = (pass_score){0, 0};
+    *score = (pass_score){0, 0, 0};
+    const int t = g->transposed;
     for (int32_t i = 0; i < count; ++i) {
         const demand *d = &demands[order[i] / 3];
         int turn = order[i] % 3, placed = 0, ok = 1;
         if (d->copies == 2) {
             if (turn)
-                ok = place_best(g, d->pairs + 2 * (turn - 1), 2, out, out_count, score, &placed);
+                ok = place_best(g, d->pairs[t] + 2 * (turn - 1), 2, out, out_count, score, &placed);
             if (ok && !placed)
-                ok = place_best(g, d->pairs, 4, out, out_count, score, &placed);
+                ok = place_best(g, d->pairs[t], 4, out, out_count, score, &placed);
         }
         for (int c = 0; ok && !placed && c < d->copies; ++c) {
             int fitted = 0;
             if (turn)
-                ok = place_best(g, d->singles[c] + (turn - 1), 1, out, out_count, score, &fitted);
+                ok = place_best(g, d->singles[t][c] + (turn - 1), 1, out, out_count, score, &fitted);
             if (ok && !fitted)
-                ok = place_best(g, d->singles[c], 2, out, out_count, score, &fitted);
+                ok = place_best(g, d->singles[t][c], 2, out, out_count, score, &fitted);
+            if (ok && !fitted && t) {
+                score->length = INFINITY; /* longer than the column fill's length: this length fails */
+                return PZ_OK;
+            }
             if (ok && !fitted) {
                 const pz_piece *piece = &pieces->pieces[d->piece];
                 return pz_error(ctx, PZ_ERR_DATA, "marker: piece %s (%.0f mm wide) does not fit on a fabric %.0f mm wide",
@@ -689,6 +799,17 @@ static uint64_t next_random(uint64_t *state)
     return *state * 2685821657736338717ull;
 }
 
+/* A random order (Fisher-Yates from the fixed xorshift sequence), every piece's turn free. */
+static void random_order(int32_t *order, int32_t count, uint64_t *state)
+{
+    for (int32_t i = 0; i < count; ++i)
+        order[i] = 3 * i;
+    for (int32_t i = count - 1; i > 0; --i) {
+        int32_t j = (int32_t)(next_random(state) % (uint64_t)(i + 1)), t = order[i];
+        order[i] = order[j], order[j] = t;
+    }
+}
+
 /* A neighbour of `order`: one piece's turn changed, two pieces swapped, or one moved to another place. */
 static void perturb(int32_t *order, int32_t count, uint64_t *state)
 {
@@ -714,62 +835,178 @@ static void perturb(int32_t *order, int32_t count, uint64_t *state)
 }
 
 typedef struct search {
-    grid grid;
+    grid grid;                  /* the bottom-left fill's */
+    grid column;                /* the column fill's (transposed; columns == 0 until column_grid makes it) */
     const pz_pieces *pieces;
     const demand *demands;
     int32_t count;              /* demands */
     int32_t *order, *trial_order, *scratch;
     pz_marker_placement *trial; /* a pass's placements */
     pz_marker *best;            /* the best pass so far (placements, placement_count) */
-    pass_score best_score;
+    pass_score best_score;      /* its true length (along the fabric) and tops */
     int32_t passes;
+    int64_t work;               /* grid_find's steps over all passes */
+    uint64_t random;            /* xorshift state */
 } search;
 
-/* Runs one pass over `order`; keeps it in s->best when it beats the best. *score: the pass's. */
-static pz_status search_try(search *s, const int32_t *order, pass_score *score, pz_ctx *ctx)
+/* Runs one pass over `order` on grid g; keeps it in s->best when its marker is shorter (a column fill's only when
+ * it fits the fabric's width). *score: the pass's, in g's axes. */
+static pz_status search_try(search *s, grid *g, const int32_t *order, pass_score *score, pz_ctx *ctx)
 {
     int32_t placed = 0;
-    pz_status status = nest_pass(&s->grid, s->pieces, s->demands, order, s->count, s->trial, &placed, score, ctx);
+    pz_status status = nest_pass(g, s->pieces, s->demands, order, s->count, s->trial, &placed, score, ctx);
     ++s->passes;
-    if (status == PZ_OK && (s->passes == 1 || score_better(*score, s->best_score))) {
-        s->best_score = *score;
+    s->work += g->work;
+    g->work = 0;
+    pass_score marker = *score;
+    if (g->transposed)
+        marker = (pass_score){score->length <= g->fabric_width_mm ? score->across : INFINITY, score->tops, 0};
+    if (status == PZ_OK && isfinite(marker.length) && (s->passes == 1 || score_better(marker, s->best_score))) {
+        s->best_score = marker;
         s->best->placement_count = placed;
         memcpy(s->best->placements, s->trial, (size_t)placed * sizeof *s->trial);
     }
     return status;
 }
 
-/* The fixed orders, then a local search from the best of them: a neighbour replaces the current order when it is
- * no worse (so the search walks along plateaus of equal length). The first order always runs; every other pass
- * only while the work budget lasts, so a marker of many pieces on a long fabric (where one pass costs the most)
- * gets fewer passes. */
-static pz_status search_run(search *s, pz_ctx *ctx)
+/* `order`, just run with `score`, becomes the search's current order. */
+static void search_adopt(search *s, const int32_t *order, const pass_score *score, pass_score *current)
+{
+    *current = *score;
+    if (order != s->order)
+        memcpy(s->order, order, (size_t)s->count * sizeof *s->order);
+}
+
+/* The fixed orders on grid g (the first always, the others while s->work is below budget); the best of them into
+ * s->order, its score into *current. */
+static pz_status search_fixed(search *s, grid *g, int64_t budget, pass_score *current, pz_ctx *ctx)
 {
     pz_status status = PZ_OK;
-    pass_score current = {INFINITY, INFINITY}, score;
-    for (int which = 0; which < kFixedOrders && (which == 0 || s->grid.work < SEARCH_WORK) && status == PZ_OK;
-         ++which) {
+    pass_score score;
+    *current = (pass_score){INFINITY, INFINITY, 0};
+    for (int which = 0; which < kFixedOrders && (which == 0 || s->work < budget) && status == PZ_OK; ++which) {
         fixed_order(s->demands, s->count, which, s->trial_order, s->scratch);
-        status = search_try(s, s->trial_order, &score, ctx);
-        if (status == PZ_OK && score_better(score, current)) {
-            current = score;
-            memcpy(s->order, s->trial_order, (size_t)s->count * sizeof *s->order);
-        }
+        status = search_try(s, g, s->trial_order, &score, ctx);
+        if (status == PZ_OK && score_better(score, *current))
+            search_adopt(s, s->trial_order, &score, current);
     }
-    uint64_t state = 0x9e3779b97f4a7c15ull;
-    int32_t since_best = 0;
-    while (s->grid.work < SEARCH_WORK && s->passes < SEARCH_MAX_PASSES && since_best < SEARCH_STALL &&
-           s->count > 1 && status == PZ_OK) {
-        memcpy(s->trial_order, s->order, (size_t)s->count * sizeof *s->order);
-        perturb(s->trial_order, s->count, &state);
-        pass_score best_before = s->best_score;
-        status = search_try(s, s->trial_order, &score, ctx);
-        since_best = score_better(s->best_score, best_before) ? 0 : since_best + 1;
-        if (status == PZ_OK && !score_better(current, score)) {
-            current = score;
-            memcpy(s->order, s->trial_order, (size_t)s->count * sizeof *s->order);
+    return status;
+}
+
+/* One neighbour of s->order on grid g; it replaces s->order when no worse than *current (so the search walks
+ * along plateaus of equal length). */
+static pz_status search_step(search *s, grid *g, pass_score *current, pass_score *score, pz_ctx *ctx)
+{
+    memcpy(s->trial_order, s->order, (size_t)s->count * sizeof *s->order);
+    perturb(s->trial_order, s->count, &s->random);
+    pz_status status = search_try(s, g, s->trial_order, score, ctx);
+    if (status == PZ_OK && !score_better(*current, *score))
+        search_adopt(s, s->trial_order, score, current);
+    return status;
+}
+
+/* The bottom-left fill: the fixed orders, then walks of a local search, the first from the best of them, each
+ * further one from a random order once the last has gone SEARCH_STALL passes without improving on its own best.
+ * The first order always runs; every other pass only while the work budget lasts, so a marker of many pieces on a
+ * long fabric (where one pass costs the most) gets fewer passes. */
+static pz_status search_rows(search *s, pz_ctx *ctx)
+{
+    pass_score current, score;
+    pz_status status = search_fixed(s, &s->grid, SEARCH_WORK, &current, ctx);
+    int32_t since_better = 0;
+    pass_score walk_best = current;
+    int32_t max_passes = kFixedOrders + SEARCH_PASSES_PER_PIECE * (s->count - 1);
+    max_passes = max_passes < SEARCH_MAX_PASSES ? max_passes : SEARCH_MAX_PASSES;
+    while (s->work < SEARCH_WORK && s->passes < max_passes && s->count > 1 && status == PZ_OK) {
+        if (since_better >= SEARCH_STALL) { /* a new walk */
+            random_order(s->order, s->count, &s->random);
+            status = search_try(s, &s->grid, s->order, &score, ctx);
+            search_adopt(s, s->order, &score, &current);
+            walk_best = current, since_better = 0;
+            continue;
         }
+        status = search_step(s, &s->grid, &current, &score, ctx);
+        if (score_better(current, walk_best))
+            walk_best = current, since_better = 0;
+        else
+            ++since_better;
     }
+    return status;
+}
+
+/* s->column set for a marker of length_mm: a transposed grid (its rows run across the fabric), made once for the
+ * first (the longest) length tried; a shorter length only moves the limit grid_find keeps the units below (the
+ * cells past it stay free and unused). 0 when that length needs more columns than a grid may have, -1 when out
+ * of memory. */
+static int column_grid(search *s, double length_mm)
+{
+    if (s->column.columns) {
+        s->column.raster.width_mm = length_mm;
+        return 1;
+    }
+    grid g = {.raster = s->grid.raster, .margin = s->grid.margin, .transposed = 1,
+              .fabric_width_mm = s->grid.raster.width_mm};
+    g.raster.width_mm = length_mm;
+    g.columns = (int32_t)ceil(length_mm / g.raster.resolution) + 2 * g.margin + 3;
+    if (g.columns >= MAX_COLUMNS)
+        return 0;
+    s->column = g;
+    return grid_grow(&s->column, 1) ? 1 : -1;
+}
+
+/*
+ * The column fill: fix the marker's length L below the best one found, and fill the fabric across its width
+ * instead of along its length -- each unit to the leftmost, then lowest, place with its top below L (the
+ * bottom-left fill on the transposed fabric). The columns so filled end level at L, where the bottom-left fill
+ * leaves a ragged top. A local search over the order minimizes the width used; as soon as a pass fits the
+ * fabric's width, its marker is kept (its length is at most L) and L goes one step below it.
+ */
+static pz_status search_columns(search *s, pz_ctx *ctx)
+{
+    const double resolution = s->grid.raster.resolution;
+    double tallest = 0.0;
+    for (int32_t i = 0; i < s->count; ++i)
+        tallest = fmax(tallest, s->demands[i].singles[0][0][0].hi[1] - s->demands[i].singles[0][0][0].lo[1]);
+    int64_t budget = s->work + COLUMN_WORK;
+    int32_t max_passes = s->passes + COLUMN_MAX_PASSES, since_feasible = 0;
+    pz_status status = PZ_OK;
+    pass_score current, score;
+    int first = 1;
+    while (status == PZ_OK && s->work < budget && s->passes < max_passes && since_feasible < COLUMN_STALL) {
+        double length = s->best_score.length - fmax(2 * resolution, COLUMN_STEP * s->best_score.length);
+        if (length < tallest + 2 * resolution)
+            break;
+        int made = column_grid(s, length);
+        if (made < 0)
+            return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
+        if (made == 0)
+            break;
+        if (first) {
+            status = search_fixed(s, &s->column, budget, &current, ctx);
+            first = 0;
+        } else { /* the current order again, at the new length */
+            status = search_try(s, &s->column, s->order, &score, ctx);
+            search_adopt(s, s->order, &score, &current);
+        }
+        while (status == PZ_OK && current.length > s->column.fabric_width_mm && s->work < budget &&
+               s->passes < max_passes && since_feasible < COLUMN_STALL && s->count > 1) {
+            status = search_step(s, &s->column, &current, &score, ctx);
+            ++since_feasible;
+        }
+        if (current.length <= s->column.fabric_width_mm)
+            since_feasible = 0;
+    }
+    return status;
+}
+
+/* The bottom-left fill's search, then the column fill's below its best length; the shortest marker of all. The
+ * budgets are counted, not timed: deterministic. */
+static pz_status search_run(search *s, pz_ctx *ctx)
+{
+    s->random = 0x9e3779b97f4a7c15ull;
+    pz_status status = search_rows(s, ctx);
+    if (status == PZ_OK && s->count > 0 && s->best_score.length <= COLUMN_MAX_WIDTHS * s->grid.raster.width_mm)
+        status = search_columns(s, ctx);
     return status;
 }
 
@@ -841,7 +1078,7 @@ static pz_status build_demands(const raster *raster, const pz_pieces *pieces, de
 
 static grid grid_make(double width_mm, double gap_mm)
 {
-    grid g = {{0, 0, width_mm}, 0, 0, 0, 0, NULL, NULL, NULL, NULL, 0};
+    grid g = {.raster = {0, 0, width_mm}};
     g.raster.resolution = fmax(fmax(1.0, width_mm / CELLS_ACROSS), (width_mm + gap_mm + 8.0) / (MAX_COLUMNS - 32));
     g.raster.reach = gap_mm / 2.0 + g.raster.resolution * 0.5 * sqrt(2.0) + 1e-9;
     g.margin = (int32_t)ceil(g.raster.reach / g.raster.resolution) + 1;
@@ -859,7 +1096,7 @@ pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *opti
     if (status != PZ_OK)
         return status;
     size_t n = (size_t)pieces->piece_count + 1;
-    search s = {grid_make(width_mm, gap_mm), pieces, NULL, 0, NULL, NULL, NULL, NULL, NULL, {0, 0}, 0};
+    search s = {.grid = grid_make(width_mm, gap_mm), .pieces = pieces};
     demand *demands = calloc(n, sizeof *demands);
     s.order = malloc(3 * n * sizeof(int32_t));
     s.trial = malloc(2 * n * sizeof *s.trial);
@@ -895,6 +1132,7 @@ pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *opti
     free(s.order);
     free(s.trial);
     grid_free(&s.grid);
+    grid_free(&s.column);
     if (status != PZ_OK) {
         pz_marker_free(&marker);
         return status;
@@ -925,7 +1163,8 @@ cJSON *pz_marker_report_json(const pz_marker *marker)
              cJSON_AddNumberToObject(json, "passes", marker->passes) &&
              cJSON_AddNumberToObject(json, "ms", round(marker->ms * 10) / 10) &&
              cJSON_AddStringToObject(json, "method",
-                                     "raster bottom-left fill over true shapes, order search, rotations 0/180");
+                                     "raster bottom-left fill over true shapes, order search with restarts, "
+                                     "column fill below the best length, rotations 0/180");
     cJSON *unplaced = ok ? cJSON_AddArrayToObject(json, "unplaced") : NULL;
     ok = ok && unplaced;
     for (int32_t i = 0; ok && i < marker->unplaced_count; ++i)
