@@ -881,6 +881,26 @@ static pz_status flatten(const flatten_settings *settings, const pz_pattern *pat
     return status;
 }
 
+pz_status pz_flatten_pattern_like_cli(const pz_cli_args *args, const pz_mesh *garment, const pz_pattern *pattern,
+                                      double strain_limit, double *uv, pz_fabric *fabric, pz_ctx *ctx)
+{
+    flatten_settings settings;
+    pz_status status = parse_settings(args, &settings, ctx);
+    if (status != PZ_OK)
+        return status;
+    if (!settings.grain_given)
+        pz_mesh_vertical_axis(garment, settings.grain);
+    settings.strain_limit = strain_limit;
+    if (fabric)
+        *fabric = settings.fabric;
+    if (!uv)
+        return PZ_OK;
+    if (settings.backend == BACKEND_LSCM)
+        return pz_param_lscm_pattern(pattern, settings.grain, uv, ctx);
+    pz_textile_result result;
+    return flatten_textile(&settings, pattern, uv, &result, ctx);
+}
+
 /* metrics[0] on the rest pose, metrics[p] on extra pose p. */
 static pz_status measure(const pz_pattern *pattern, const double *uv, const pz_fabric *fabric,
                          pz_metrics **metrics, int count, pz_ctx *ctx)

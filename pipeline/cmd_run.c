@@ -499,41 +499,17 @@ static double ladder_strain_above(double strain)
 static pz_status ladder_flatten(const run_state *state, const pz_pattern *pattern, double max_strain, double *uv,
                                 pz_ctx *ctx)
 {
-    const pz_cli_args *args = state->args;
-    double grain[3];
-    const char *text = pz_cli_value(args, PZ_CLI_OPT_GRAIN);
-    if (!text || sscanf(text, "%lf,%lf,%lf", &grain[0], &grain[1], &grain[2]) != 3)
-        pz_mesh_vertical_axis(state->garment, grain);
-    text = pz_cli_value(args, PZ_CLI_OPT_BACKEND);
-    if (text && strcmp(text, "lscm") == 0)
-        return pz_param_lscm_pattern(pattern, grain, uv, ctx);
-    pz_textile_options options = {0};
-    options.iterations = 20;  /* flatten's DEFAULT_ITERATIONS */
-    if ((text = pz_cli_value(args, PZ_CLI_OPT_ITERATIONS)))
-        options.iterations = atoi(text);
-    double weights[4] = {5, 1, 5, 5};  /* flatten's defaults */
-    if ((text = pz_cli_value(args, PZ_CLI_OPT_WEIGHTS)))
-        sscanf(text, "%lf,%lf,%lf,%lf", &weights[0], &weights[1], &weights[2], &weights[3]);
-    options.weights_given = 1;
-    options.weight_stretch = weights[0];
-    options.weight_rigid = weights[1];
-    options.weight_dart = weights[2];
-    options.weight_seam = weights[3];
-    options.grain_given = 1;
-    memcpy(options.grain, grain, sizeof grain);
-    options.use_poses = pattern->mesh->pose_count > 0;
-    options.strain_limit = max_strain;
-    pz_textile_result result;
-    return pz_param_textile(pattern, &options, uv, &result, ctx);
+    return pz_flatten_pattern_like_cli(state->args, state->garment, pattern, max_strain, uv, NULL, ctx);
 }
 
 /* The fabric constants flatten measures with (--fabric or its defaults). */
 static pz_fabric ladder_fabric(const run_state *state)
 {
     pz_fabric fabric = {0.946, 0.548, 0.159};
-    const char *text = pz_cli_value(state->args, PZ_CLI_OPT_FABRIC);
-    if (text)
-        sscanf(text, "%lf,%lf,%lf", &fabric.k_su, &fabric.k_sv, &fabric.k_r);
+    pz_ctx quiet;
+    pz_ctx_init(&quiet);
+    quiet.quiet = 1;
+    pz_flatten_pattern_like_cli(state->args, state->garment, NULL, 0, NULL, &fabric, &quiet);
     return fabric;
 }
 

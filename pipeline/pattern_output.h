@@ -193,4 +193,14 @@ typedef struct pz_flatten_extension {
  */
 pz_status pz_flatten_execute(const pz_cli_args *args, const pz_flatten_extension *extension, pz_ctx *ctx);
 
+/**
+ * The flattening `flatten` would make of pattern with the options in args (--backend textile or lscm;
+ * wirewarp and springmass are replaced by textile), grain from --grain or garment's vertical axis,
+ * textile strain goal strain_limit (0 = none): for `run`, which judges looser goal settings on their own
+ * patterns. Writes uv (2 per pattern vertex, the caller's; NULL: only *fabric) and *fabric (--fabric or
+ * the defaults, may be NULL).
+ */
+pz_status pz_flatten_pattern_like_cli(const pz_cli_args *args, const pz_mesh *garment, const pz_pattern *pattern,
+                                      double strain_limit, double *uv, pz_fabric *fabric, pz_ctx *ctx);
+
 #endif /* PZ_PATTERN_OUTPUT_H */
