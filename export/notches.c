@@ -29,7 +29,7 @@
  */
 #include "export/notches.h"
 
-#include "mesh/internal.h"
+#include "core/util.h"
 
 #include <float.h>
 #include <math.h>

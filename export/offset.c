@@ -35,7 +35,7 @@
  */
 #include "export/offset.h"
 
-#include "mesh/internal.h"
+#include "core/util.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -59,8 +59,8 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
-#include "field/internal.h"
-#include "mesh/internal.h"
+#include "core/vec.h"
+#include "core/util.h"
 
 #include <cholmod.h>
 #include <cjson/cJSON.h>
@@ -74,17 +74,17 @@
 double pz_field_cross_angle_deg(const double arm[3], const double direction[3], const double normal[3])
 {
     double d[3];
-    double along = dot3(direction, normal);
+    double along = pz_vec3_dot(direction, normal);
     for (int i = 0; i < 3; ++i)
         d[i] = direction[i] - along * normal[i];
-    if (normalize3(d) == 0.0)
+    if (pz_vec3_normalize(d) == 0.0)
         return 0.0;
     double other[3];
-    cross3(normal, arm, other);
-    double angle = atan2(fabs(dot3(d, other)), fabs(dot3(d, arm))); /* 0 .. pi/2 */
-    if (angle > 0.25 * FIELD_PI)
-        angle = 0.5 * FIELD_PI - angle;
-    return angle * 180.0 / FIELD_PI;
+    pz_vec3_cross(normal, arm, other);
+    double angle = atan2(fabs(pz_vec3_dot(d, other)), fabs(pz_vec3_dot(d, arm))); /* 0 .. pi/2 */
+    if (angle > 0.25 * PZ_PI)
+        angle = 0.5 * PZ_PI - angle;
+    return angle * 180.0 / PZ_PI;
 }
 
 /* ---------------------------------------------------------------- face frames */
@@ -114,12 +114,12 @@ static int frames_build(const pz_mesh *mesh, frames *fr)
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         const int32_t *face = mesh->faces + 3 * (size_t)f;
         double *e1 = fr->e1 + 3 * (size_t)f, *e2 = fr->e2 + 3 * (size_t)f, *n = fr->n + 3 * (size_t)f, b[3];
-        sub3(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], e1);
-        sub3(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], b);
-        cross3(e1, b, n);
-        fr->area[f] = 0.5 * normalize3(n);
-        normalize3(e1);
-        cross3(n, e1, e2);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], e1);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], b);
+        pz_vec3_cross(e1, b, n);
+        fr->area[f] = 0.5 * pz_vec3_normalize(n);
+        pz_vec3_normalize(e1);
+        pz_vec3_cross(n, e1, e2);
         total += fr->area[f];
     }
     fr->mean_area = mesh->face_count ? total / mesh->face_count : 1.0;
@@ -131,7 +131,7 @@ static int frames_build(const pz_mesh *mesh, frames *fr)
 /* Angle of a 3D vector in face f's frame. */
 static double frame_angle(const frames *fr, int32_t f, const double *v)
 {
-    return atan2(dot3(v, fr->e2 + 3 * (size_t)f), dot3(v, fr->e1 + 3 * (size_t)f));
+    return atan2(pz_vec3_dot(v, fr->e2 + 3 * (size_t)f), pz_vec3_dot(v, fr->e1 + 3 * (size_t)f));
 }
 
 static void frame_direction(const frames *fr, int32_t f, double angle, double *out)
@@ -146,7 +146,7 @@ static double transport_angle(const pz_mesh *mesh, const pz_topology *topology, 
 {
     int32_t t = topology->twin[h];
     double v[3];
-    sub3(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)pz_he_from(topology, h), v);
+    pz_vec3_sub(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)pz_he_from(topology, h), v);
     return 4.0 * (frame_angle(fr, pz_he_face(t), v) - frame_angle(fr, pz_he_face(h), v));
 }
 
@@ -344,14 +344,14 @@ static int grid_build(const pz_mesh *mesh, double mean_edge, face_grid *grid)
 static void closest_on_triangle(const double *p, const double *a, const double *b, const double *c, double *out)
 {
     double ab[3], ac[3], ap[3], bp[3], cp[3];
-    sub3(b, a, ab), sub3(c, a, ac), sub3(p, a, ap);
-    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    pz_vec3_sub(b, a, ab), pz_vec3_sub(c, a, ac), pz_vec3_sub(p, a, ap);
+    double d1 = pz_vec3_dot(ab, ap), d2 = pz_vec3_dot(ac, ap);
     if (d1 <= 0.0 && d2 <= 0.0) {
         memcpy(out, a, 3 * sizeof *out);
         return;
     }
-    sub3(p, b, bp);
-    double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    pz_vec3_sub(p, b, bp);
+    double d3 = pz_vec3_dot(ab, bp), d4 = pz_vec3_dot(ac, bp);
     if (d3 >= 0.0 && d4 <= d3) {
         memcpy(out, b, 3 * sizeof *out);
         return;
@@ -362,8 +362,8 @@ static void closest_on_triangle(const double *p, const double *a, const double *
         for (int i = 0; i < 3; ++i) out[i] = a[i] + v * ab[i];
         return;
     }
-    sub3(p, c, cp);
-    double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    pz_vec3_sub(p, c, cp);
+    double d5 = pz_vec3_dot(ab, cp), d6 = pz_vec3_dot(ac, cp);
     if (d6 >= 0.0 && d5 <= d6) {
         memcpy(out, c, 3 * sizeof *out);
         return;
@@ -390,8 +390,8 @@ static double face_distance2(const pz_mesh *mesh, int32_t f, const double *p)
     double q[3], d[3];
     closest_on_triangle(p, mesh->positions + 3 * (size_t)face[0], mesh->positions + 3 * (size_t)face[1],
                         mesh->positions + 3 * (size_t)face[2], q);
-    sub3(p, q, d);
-    return dot3(d, d);
+    pz_vec3_sub(p, q, d);
+    return pz_vec3_dot(d, d);
 }
 
 /* The face closest to p: shells of cells around p's cell, stopping once the
@@ -443,8 +443,8 @@ static int sketch_accumulate(const pz_mesh *mesh, const frames *fr, const pz_ske
         for (int32_t i = sketch->curve_offsets[c]; i + 1 < sketch->curve_offsets[c + 1]; ++i) {
             const double *a = sketch->points + 3 * (size_t)i, *b = a + 3;
             double tangent[3];
-            sub3(b, a, tangent);
-            double length = normalize3(tangent);
+            pz_vec3_sub(b, a, tangent);
+            double length = pz_vec3_normalize(tangent);
             if (length == 0.0)
                 continue;
             double samples = ceil(length / step);
@@ -457,7 +457,7 @@ static int sketch_accumulate(const pz_mesh *mesh, const frames *fr, const pz_ske
                 int32_t f = grid_closest_face(&grid, mesh, p);
                 if (f < 0)
                     continue;
-                double x = dot3(tangent, fr->e1 + 3 * (size_t)f), y = dot3(tangent, fr->e2 + 3 * (size_t)f);
+                double x = pz_vec3_dot(tangent, fr->e1 + 3 * (size_t)f), y = pz_vec3_dot(tangent, fr->e2 + 3 * (size_t)f);
                 double weight = length / samples * hypot(x, y), angle = atan2(y, x);
                 re[f] += weight * cos(4.0 * angle);
                 im[f] += weight * sin(4.0 * angle);
@@ -475,15 +475,15 @@ static double pose_to_rest_angle(const pz_mesh *mesh, const frames *fr, const do
 {
     const int32_t *face = mesh->faces + 3 * (size_t)f;
     double a[3], b[3];
-    sub3(pose + 3 * (size_t)face[1], pose + 3 * (size_t)face[0], a);
-    sub3(pose + 3 * (size_t)face[2], pose + 3 * (size_t)face[0], b);
-    double aa = dot3(a, a), ab = dot3(a, b), bb = dot3(b, b), ad = dot3(a, direction), bd = dot3(b, direction);
+    pz_vec3_sub(pose + 3 * (size_t)face[1], pose + 3 * (size_t)face[0], a);
+    pz_vec3_sub(pose + 3 * (size_t)face[2], pose + 3 * (size_t)face[0], b);
+    double aa = pz_vec3_dot(a, a), ab = pz_vec3_dot(a, b), bb = pz_vec3_dot(b, b), ad = pz_vec3_dot(a, direction), bd = pz_vec3_dot(b, direction);
     double det = aa * bb - ab * ab;
     if (!(fabs(det) > 0.0))
         return frame_angle(fr, f, direction);
     double alpha = (bb * ad - ab * bd) / det, beta = (aa * bd - ab * ad) / det, rest[3], ra[3], rb[3];
-    sub3(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], ra);
-    sub3(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], rb);
+    pz_vec3_sub(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], ra);
+    pz_vec3_sub(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], rb);
     for (int i = 0; i < 3; ++i)
         rest[i] = alpha * ra[i] + beta * rb[i];
     return frame_angle(fr, f, rest);
@@ -534,8 +534,8 @@ static int boundary_constraints(const pz_mesh *mesh, const pz_topology *topology
         if (topology->twin[h] >= 0 || field->constraint[f] == PZ_FIELD_SKETCH)
             continue;
         double v[3];
-        sub3(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)pz_he_from(topology, h), v);
-        double length = normalize3(v);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)pz_he_from(topology, h), v);
+        double length = pz_vec3_normalize(v);
         if (length <= best_length[f])
             continue;
         best_length[f] = length;
@@ -708,9 +708,9 @@ done:
 
 static double wrap_angle(double a)
 {
-    a = fmod(a, 2.0 * FIELD_PI);
-    if (a > FIELD_PI) a -= 2.0 * FIELD_PI;
-    if (a <= -FIELD_PI) a += 2.0 * FIELD_PI;
+    a = fmod(a, 2.0 * PZ_PI);
+    if (a > PZ_PI) a -= 2.0 * PZ_PI;
+    if (a <= -PZ_PI) a += 2.0 * PZ_PI;
     return a;
 }
 
@@ -737,7 +737,7 @@ static pz_status find_singularities(const pz_mesh *mesh, const pz_topology *topo
             turn += wrap_angle(arg_g - arg_f - rho);
             h = t;
         } while (h != h0);
-        double index = (turn / 4.0 + defect[v]) / (2.0 * FIELD_PI);
+        double index = (turn / 4.0 + defect[v]) / (2.0 * PZ_PI);
         double quarters = round(index * 4.0);
         if (quarters == 0.0)
             continue;
@@ -789,15 +789,15 @@ static void alignment_figures(const pz_mesh *mesh, const pz_topology *topology, 
         for (int k = 0; k < 3; ++k) {
             int32_t other = 3 * f + k;
             double a[3], b[3];
-            sub3(mesh->positions + 3 * (size_t)pz_he_to(topology, other), mesh->positions + 3 * (size_t)pz_he_from(topology, other), a);
-            sub3(mesh->positions + 3 * (size_t)pz_he_to(topology, longest), mesh->positions + 3 * (size_t)pz_he_from(topology, longest), b);
-            if (topology->twin[other] < 0 && (dot3(a, a) > dot3(b, b) || (dot3(a, a) == dot3(b, b) && other < longest)))
+            pz_vec3_sub(mesh->positions + 3 * (size_t)pz_he_to(topology, other), mesh->positions + 3 * (size_t)pz_he_from(topology, other), a);
+            pz_vec3_sub(mesh->positions + 3 * (size_t)pz_he_to(topology, longest), mesh->positions + 3 * (size_t)pz_he_from(topology, longest), b);
+            if (topology->twin[other] < 0 && (pz_vec3_dot(a, a) > pz_vec3_dot(b, b) || (pz_vec3_dot(a, a) == pz_vec3_dot(b, b) && other < longest)))
                 longest = other;
         }
         if (longest != h)
             continue;
         double v[3];
-        sub3(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)pz_he_from(topology, h), v);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)pz_he_from(topology, h), v);
         b_sum += pz_field_cross_angle_deg(field->directions + 3 * (size_t)f, v, field->normals + 3 * (size_t)f);
         ++b_count;
     }
@@ -965,7 +965,7 @@ static float *field_points(const pz_mesh *mesh, const pz_field *field, double ar
             c[i] = (mesh->positions[3 * (size_t)face[0] + i] + mesh->positions[3 * (size_t)face[1] + i] +
                     mesh->positions[3 * (size_t)face[2] + i]) / 3.0;
         memcpy(arms[0], field->directions + 3 * (size_t)f, sizeof arms[0]);
-        cross3(field->normals + 3 * (size_t)f, arms[0], arms[1]);
+        pz_vec3_cross(field->normals + 3 * (size_t)f, arms[0], arms[1]);
         float *p = points + 12 * (size_t)f;
         for (int a = 0; a < 2; ++a)
             for (int i = 0; i < 3; ++i) {

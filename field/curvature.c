@@ -39,7 +39,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
-#include "field/internal.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <omp.h>
@@ -53,8 +53,8 @@ static void orthogonal3(const double *n, double *out)
 {
     double axis[3] = {0.0, 0.0, 0.0};
     axis[fabs(n[0]) < fabs(n[1]) ? (fabs(n[0]) < fabs(n[2]) ? 0 : 2) : (fabs(n[1]) < fabs(n[2]) ? 1 : 2)] = 1.0;
-    cross3(n, axis, out);
-    normalize3(out);
+    pz_vec3_cross(n, axis, out);
+    pz_vec3_normalize(out);
 }
 
 double pz_field_mean_edge_length(const pz_mesh *mesh, const pz_topology *topology)
@@ -65,8 +65,8 @@ double pz_field_mean_edge_length(const pz_mesh *mesh, const pz_topology *topolog
     for (int32_t e = 0; e < topology->edge_count; ++e) {
         int32_t h = topology->edge_halfedge[2 * e];
         double d[3];
-        sub3(mesh->positions + 3 * (size_t)pz_he_from(topology, h), mesh->positions + 3 * (size_t)pz_he_to(topology, h), d);
-        total += sqrt(dot3(d, d));
+        pz_vec3_sub(mesh->positions + 3 * (size_t)pz_he_from(topology, h), mesh->positions + 3 * (size_t)pz_he_to(topology, h), d);
+        total += sqrt(pz_vec3_dot(d, d));
     }
     return total / topology->edge_count;
 }
@@ -207,15 +207,15 @@ static void vertex_normals(const pz_mesh *mesh, const double *positions, double 
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         const int32_t *face = mesh->faces + 3 * (size_t)f;
         double e1[3], e2[3], n[3];
-        sub3(positions + 3 * (size_t)face[1], positions + 3 * (size_t)face[0], e1);
-        sub3(positions + 3 * (size_t)face[2], positions + 3 * (size_t)face[0], e2);
-        cross3(e1, e2, n);
+        pz_vec3_sub(positions + 3 * (size_t)face[1], positions + 3 * (size_t)face[0], e1);
+        pz_vec3_sub(positions + 3 * (size_t)face[2], positions + 3 * (size_t)face[0], e2);
+        pz_vec3_cross(e1, e2, n);
         for (int k = 0; k < 3; ++k)
             for (int c = 0; c < 3; ++c)
                 normals[3 * (size_t)face[k] + c] += n[c];
     }
     for (int32_t v = 0; v < mesh->vertex_count; ++v)
-        normalize3(normals + 3 * (size_t)v);
+        pz_vec3_normalize(normals + 3 * (size_t)v);
 }
 
 /* Collects the neighbourhood of v: breadth-first over edges, keeping the
@@ -237,15 +237,15 @@ static void gather_patch(const adjacency *adj, const double *positions, int32_t 
                 continue;
             stamp[w] = v;
             double d[3];
-            sub3(positions + 3 * (size_t)w, center, d);
-            double distance = sqrt(dot3(d, d));
+            pz_vec3_sub(positions + 3 * (size_t)w, center, d);
+            double distance = sqrt(pz_vec3_dot(d, d));
             if (u != v && distance >= max_radius)
                 continue;
             int32_t i = tail - 1;
             queue[tail++] = w;
-            patch->xyz[3 * i] = dot3(d, patch->t1);
-            patch->xyz[3 * i + 1] = dot3(d, patch->t2);
-            patch->xyz[3 * i + 2] = dot3(d, patch->n);
+            patch->xyz[3 * i] = pz_vec3_dot(d, patch->t1);
+            patch->xyz[3 * i + 1] = pz_vec3_dot(d, patch->t2);
+            patch->xyz[3 * i + 2] = pz_vec3_dot(d, patch->n);
             patch->distance[i] = distance;
         }
     }
@@ -282,12 +282,12 @@ static int vertex_tensors(const pz_mesh *mesh, const adjacency *adj, const doubl
         for (int32_t v = 0; v < n; ++v) {
             memcpy(patch.n, normals + 3 * (size_t)v, sizeof patch.n);
             double *out = tensors + (size_t)v * scale_count * 6;
-            if (dot3(patch.n, patch.n) == 0.0) {
+            if (pz_vec3_dot(patch.n, patch.n) == 0.0) {
                 memset(out, 0, (size_t)scale_count * 6 * sizeof *out);
                 continue;
             }
             orthogonal3(patch.n, patch.t1);
-            cross3(patch.n, patch.t1, patch.t2);
+            pz_vec3_cross(patch.n, patch.t1, patch.t2);
             gather_patch(adj, positions, v, max_radius, stamp, queue, &patch);
             for (int32_t s = 0; s < scale_count; ++s)
                 fit_scale(&patch, base_radius * (double)(1 << s), out + 6 * s);
@@ -303,12 +303,12 @@ static int vertex_tensors(const pz_mesh *mesh, const adjacency *adj, const doubl
 static int face_frame(const double *positions, const int32_t *face, double e1[3], double e2[3], double n[3])
 {
     double b[3];
-    sub3(positions + 3 * (size_t)face[1], positions + 3 * (size_t)face[0], e1);
-    sub3(positions + 3 * (size_t)face[2], positions + 3 * (size_t)face[0], b);
-    cross3(e1, b, n);
-    if (normalize3(n) == 0.0 || normalize3(e1) == 0.0)
+    pz_vec3_sub(positions + 3 * (size_t)face[1], positions + 3 * (size_t)face[0], e1);
+    pz_vec3_sub(positions + 3 * (size_t)face[2], positions + 3 * (size_t)face[0], b);
+    pz_vec3_cross(e1, b, n);
+    if (pz_vec3_normalize(n) == 0.0 || pz_vec3_normalize(e1) == 0.0)
         return 0;
-    cross3(n, e1, e2);
+    pz_vec3_cross(n, e1, e2);
     return 1;
 }
 
@@ -317,7 +317,7 @@ static double tensor_form(const double *t, const double *a, const double *b)
 {
     double ta[3] = {t[0] * a[0] + t[1] * a[1] + t[2] * a[2], t[1] * a[0] + t[3] * a[1] + t[4] * a[2],
                     t[2] * a[0] + t[4] * a[1] + t[5] * a[2]};
-    return dot3(ta, b);
+    return pz_vec3_dot(ta, b);
 }
 
 static void combine_face(const pz_mesh *mesh, const double *positions, const double *tensors, int32_t scale_count,
@@ -344,7 +344,7 @@ static void combine_face(const pz_mesh *mesh, const double *positions, const dou
         double k1 = lambda_hi, k2 = lambda_lo;
         if (fabs(lambda_lo) > fabs(lambda_hi)) {
             k1 = lambda_lo, k2 = lambda_hi;
-            phi += 0.5 * FIELD_PI;
+            phi += 0.5 * PZ_PI;
         }
         double a = (fabs(k1) - fabs(k2)) / (fabs(k1) + fabs(k2) + eps);
         sum_re += a * cos(4.0 * phi), sum_im += a * sin(4.0 * phi);
@@ -359,10 +359,10 @@ static void combine_face(const pz_mesh *mesh, const double *positions, const dou
     /* Of the four arms of the combined cross, keep the one nearest the finest k1 direction. */
     double arm[3], best[3], best_dot = -1.0;
     for (int k = 0; k < 4; ++k) {
-        double angle = theta + 0.5 * FIELD_PI * k;
+        double angle = theta + 0.5 * PZ_PI * k;
         for (int i = 0; i < 3; ++i)
             arm[i] = cos(angle) * e1[i] + sin(angle) * e2[i];
-        double d = dot3(arm, direction);
+        double d = pz_vec3_dot(arm, direction);
         if (d > best_dot)
             best_dot = d, memcpy(best, arm, sizeof best);
     }
@@ -392,10 +392,10 @@ static double surface_size(const pz_mesh *mesh, const double *positions)
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         const int32_t *face = mesh->faces + 3 * (size_t)f;
         double a[3], b[3], n[3];
-        sub3(positions + 3 * (size_t)face[1], positions + 3 * (size_t)face[0], a);
-        sub3(positions + 3 * (size_t)face[2], positions + 3 * (size_t)face[0], b);
-        cross3(a, b, n);
-        area += 0.5 * sqrt(dot3(n, n));
+        pz_vec3_sub(positions + 3 * (size_t)face[1], positions + 3 * (size_t)face[0], a);
+        pz_vec3_sub(positions + 3 * (size_t)face[2], positions + 3 * (size_t)face[0], b);
+        pz_vec3_cross(a, b, n);
+        area += 0.5 * sqrt(pz_vec3_dot(n, n));
     }
     return sqrt(area);
 }

@@ -44,7 +44,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
-#include "internal.h"
+#include "core/util.h"
 
 #include <math.h>
 #include <stdint.h>

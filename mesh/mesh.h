@@ -28,91 +28,11 @@
 #include <stdint.h>
 #include <stdio.h>
 
+#include "core/core.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-#define PZ_VERSION_STRING "0.1.0"
-
-/* ------------------------------------------------------------------------ */
-/* Status and context                                                        */
-/* ------------------------------------------------------------------------ */
-
-/** One status enum for every call: 0 is success, negative values are errors. */
-typedef enum pz_status {
-    PZ_OK = 0,
-    PZ_ERR_USAGE = -1,         /* bad command line or impossible parameter   (exit 64) */
-    PZ_ERR_DATA = -2,          /* malformed file or mismatched poses         (exit 65) */
-    PZ_ERR_INVALID_MESH = -3,  /* parses, but fails validation               (exit 65) */
-    PZ_ERR_OPEN = -4,          /* cannot open or read an input               (exit 66) */
-    PZ_ERR_CREATE = -5,        /* cannot create or write an output           (exit 73) */
-    PZ_ERR_NOMEM = -6,         /* out of memory                              (exit 70) */
-    PZ_ERR_INTERNAL = -7       /* a bug or a failed numerical step           (exit 70) */
-} pz_status;
-
-/** Short name of a status ("ok", "usage error", ...). Never NULL. */
-const char *pz_status_str(pz_status status);
-
-/** The process exit code for a status (0, 64, 65, 66, 70, 73; sysexits.h). */
-int pz_status_exit_code(pz_status status);
-
-/**
- * The context passed last to every fallible call. Zero-initialize it (or call
- * pz_ctx_init). It holds the last error message and the logging switches; it
- * owns no heap memory, so it needs no free.
- */
-typedef struct pz_ctx {
-    char error[1024];  /* last error, one line, "FILE: problem" */
-    int quiet;         /* 1: pz_log/pz_note print nothing */
-    int verbose;       /* 1: pz_debug prints too */
-} pz_ctx;
-
-void pz_ctx_init(pz_ctx *ctx);
-
-/**
- * Records a one-line error in ctx->error (printf format; newlines are replaced
- * by spaces) and returns `status` so a caller can write
- * `return pz_error(ctx, PZ_ERR_DATA, "%s: line %d: bad face", path, line);`.
- */
-pz_status pz_error(pz_ctx *ctx, pz_status status, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
-#endif
-    ;
-
-/** Progress and notes on stderr ("panelize: ..."), silenced by ctx->quiet. */
-void pz_note(pz_ctx *ctx, const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 2, 3)))
-#endif
-    ;
-
-/** Wall-clock seconds from a monotonic clock, for timings. */
-double pz_seconds(void);
-
-/* ------------------------------------------------------------------------ */
-/* Atomic output files                                                       */
-/* ------------------------------------------------------------------------ */
-
-/**
- * Output is written to "PATH.tmp-PID" and renamed to PATH only on success, so
- * a failed run leaves nothing behind.
- *   pz_output out; FILE *f;
- *   if ((st = pz_output_open(&out, path, "wb", ctx))) return st;
- *   ... write to out.file ...
- *   return pz_output_commit(&out, ctx);   (or pz_output_abort(&out) on error)
- * pz_output_commit checks write errors (ferror, fclose) and reports
- * PZ_ERR_CREATE naming PATH. pz_output_abort closes and removes the temporary.
- */
-typedef struct pz_output {
-    FILE *file;
-    char *path;      /* final path (owned) */
-    char *tmp_path;  /* temporary path (owned) */
-} pz_output;
-
-pz_status pz_output_open(pz_output *out, const char *path, const char *mode, pz_ctx *ctx);
-pz_status pz_output_commit(pz_output *out, pz_ctx *ctx);
-void pz_output_abort(pz_output *out);
 
 /* ------------------------------------------------------------------------ */
 /* The mesh                                                                  */

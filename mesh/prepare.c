@@ -62,7 +62,7 @@
 #include "mesh.h"
 
 #include "cgal_shim.h"
-#include "internal.h"
+#include "core/util.h"
 
 #include <math.h>
 #include <stdarg.h>

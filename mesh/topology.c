@@ -24,7 +24,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "mesh.h"
-#include "internal.h"
+#include "core/util.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -72,7 +72,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "param.h"
-#include "mesh/internal.h"
+#include "core/util.h"
 
 #include <cholmod.h>
 #include <math.h>

@@ -28,7 +28,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "pipeline/pattern_output.h"
 
-#include "mesh/internal.h"
+#include "core/util.h"
 
 #include <ctype.h>
 #include <errno.h>

@@ -46,7 +46,7 @@
  */
 #include "trace/trace.h"
 #include "field/field.h"
-#include "field/internal.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -75,17 +75,17 @@ void pz_trace_graph_free(pz_trace_graph **graph)
  */
 static void rotate_between(const double *v, const double *from, const double *to, double *out)
 {
-    double c = dot3(from, to);
+    double c = pz_vec3_dot(from, to);
     if (c < -0.999) {
-        double along = dot3(v, to);
+        double along = pz_vec3_dot(v, to);
         for (int i = 0; i < 3; ++i)
             out[i] = v[i] - along * to[i];
         return;
     }
     double k[3], kv[3];
-    cross3(from, to, k);
-    cross3(k, v, kv);
-    double kdot = dot3(k, v) / (1.0 + c);
+    pz_vec3_cross(from, to, k);
+    pz_vec3_cross(k, v, kv);
+    double kdot = pz_vec3_dot(k, v) / (1.0 + c);
     for (int i = 0; i < 3; ++i)
         out[i] = c * v[i] + kv[i] + kdot * k[i];
 }
@@ -93,17 +93,17 @@ static void rotate_between(const double *v, const double *from, const double *to
 /* v projected on the plane of unit normal n, normalised (zero stays zero). */
 static void tangent_unit(const double *v, const double *n, double *out)
 {
-    double along = dot3(v, n);
+    double along = pz_vec3_dot(v, n);
     for (int i = 0; i < 3; ++i)
         out[i] = v[i] - along * n[i];
-    normalize3(out);
+    pz_vec3_normalize(out);
 }
 
 void pz_trace_arm_direction(const pz_trace_graph *graph, int32_t vertex, int arm, double out[3])
 {
     const double *a0 = graph->vertex_arms + 3 * (size_t)vertex, *n = graph->vertex_normals + 3 * (size_t)vertex;
     double a1[3];
-    cross3(n, a0, a1);
+    pz_vec3_cross(n, a0, a1);
     static const double cosines[4] = {1, 0, -1, 0}, sines[4] = {0, 1, 0, -1};
     int k = ((arm % 4) + 4) % 4;
     for (int i = 0; i < 3; ++i)
@@ -114,8 +114,8 @@ int pz_trace_closest_arm(const pz_trace_graph *graph, int32_t vertex, const doub
 {
     const double *a0 = graph->vertex_arms + 3 * (size_t)vertex, *n = graph->vertex_normals + 3 * (size_t)vertex;
     double a1[3];
-    cross3(n, a0, a1);
-    double x = dot3(direction, a0), y = dot3(direction, a1);
+    pz_vec3_cross(n, a0, a1);
+    double x = pz_vec3_dot(direction, a0), y = pz_vec3_dot(direction, a1);
     if (fabs(x) >= fabs(y))
         return x >= 0.0 ? 0 : 2;
     return y >= 0.0 ? 1 : 3;
@@ -127,15 +127,15 @@ static void vertex_normals(const pz_mesh *mesh, double *normals)
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         const int32_t *face = mesh->faces + 3 * (size_t)f;
         double a[3], b[3], n[3]; /* |n| = twice the area: area weighting for free */
-        sub3(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], a);
-        sub3(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], b);
-        cross3(a, b, n);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], a);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], b);
+        pz_vec3_cross(a, b, n);
         for (int k = 0; k < 3; ++k)
             for (int i = 0; i < 3; ++i)
                 normals[3 * (size_t)face[k] + i] += n[i];
     }
     for (int32_t v = 0; v < mesh->vertex_count; ++v)
-        normalize3(normals + 3 * (size_t)v);
+        pz_vec3_normalize(normals + 3 * (size_t)v);
 }
 
 /* Every vertex: the angle-weighted 4-RoSy average of the incident faces' arms. */
@@ -156,23 +156,23 @@ static int average_arms(const pz_mesh *mesh, const pz_topology *topology, const 
         if (h < 0)
             continue;
         double d[3];
-        sub3(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)v, d);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)pz_he_to(topology, h), mesh->positions + 3 * (size_t)v, d);
         tangent_unit(d, graph->vertex_normals + 3 * (size_t)v, e1);
     }
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         double fn[3], a[3], b[3];
         const int32_t *face = mesh->faces + 3 * (size_t)f;
-        sub3(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], a);
-        sub3(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], b);
-        cross3(a, b, fn);
-        normalize3(fn);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)face[1], mesh->positions + 3 * (size_t)face[0], a);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)face[2], mesh->positions + 3 * (size_t)face[0], b);
+        pz_vec3_cross(a, b, fn);
+        pz_vec3_normalize(fn);
         for (int k = 0; k < 3; ++k) {
             int32_t v = face[k];
             const double *n = graph->vertex_normals + 3 * (size_t)v, *e1 = frames + 3 * (size_t)v;
             double e2[3], d[3];
-            cross3(n, e1, e2);
+            pz_vec3_cross(n, e1, e2);
             rotate_between(face_arms + 3 * (size_t)f, fn, n, d);
-            double theta = atan2(dot3(d, e2), dot3(d, e1)), weight = corner_angles[3 * (size_t)f + k];
+            double theta = atan2(pz_vec3_dot(d, e2), pz_vec3_dot(d, e1)), weight = corner_angles[3 * (size_t)f + k];
             double *s = sums + 4 * (size_t)v;
             s[0] += weight * cos(4.0 * theta), s[1] += weight * sin(4.0 * theta);
             if (weight > s[2])
@@ -186,7 +186,7 @@ static int average_arms(const pz_mesh *mesh, const pz_topology *topology, const 
         const double *e1 = frames + 3 * (size_t)v;
         double theta = hypot(s[0], s[1]) > 1e-9 * s[2] ? 0.25 * atan2(s[1], s[0]) : s[3];
         double e2[3], *arm = graph->vertex_arms + 3 * (size_t)v;
-        cross3(n, e1, e2);
+        pz_vec3_cross(n, e1, e2);
         for (int i = 0; i < 3; ++i)
             arm[i] = cos(theta) * e1[i] + sin(theta) * e2[i];
     }
@@ -203,8 +203,8 @@ static int average_arms(const pz_mesh *mesh, const pz_topology *topology, const 
  */
 static uint8_t boundary_kind(double phi, double sector)
 {
-    double margin = TRACE_ALONG_MARGIN_DEG * FIELD_PI / 180.0;
-    if (phi < margin || phi > 2.0 * FIELD_PI - margin || fabs(phi - sector) < margin)
+    double margin = TRACE_ALONG_MARGIN_DEG * PZ_PI / 180.0;
+    if (phi < margin || phi > 2.0 * PZ_PI - margin || fabs(phi - sector) < margin)
         return PZ_TRACE_NODE_ALONG;
     return phi < sector ? PZ_TRACE_NODE_ENTER : PZ_TRACE_NODE_EXIT;
 }
@@ -213,9 +213,9 @@ static uint8_t boundary_kind(double phi, double sector)
 static double frame_angle(const double *d, const double *x, const double *n)
 {
     double y[3];
-    cross3(n, x, y);
-    double angle = atan2(dot3(d, y), dot3(d, x));
-    return angle < 0.0 ? angle + 2.0 * FIELD_PI : angle;
+    pz_vec3_cross(n, x, y);
+    double angle = atan2(pz_vec3_dot(d, y), pz_vec3_dot(d, x));
+    return angle < 0.0 ? angle + 2.0 * PZ_PI : angle;
 }
 
 /* Node kinds: INTERIOR off the boundary; ENTER, EXIT or ALONG (boundary_kind) on it. */
@@ -229,8 +229,8 @@ static int node_kinds(const pz_mesh *mesh, const pz_topology *topology, pz_trace
         if (topology->twin[h] >= 0)
             continue;
         int32_t a = pz_he_from(topology, h), b = pz_he_to(topology, h);
-        sub3(mesh->positions + 3 * (size_t)b, mesh->positions + 3 * (size_t)a, edges + 6 * (size_t)a);
-        sub3(mesh->positions + 3 * (size_t)b, mesh->positions + 3 * (size_t)a, edges + 6 * (size_t)b + 3);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)b, mesh->positions + 3 * (size_t)a, edges + 6 * (size_t)a);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)b, mesh->positions + 3 * (size_t)a, edges + 6 * (size_t)b + 3);
     }
     for (int32_t v = 0; v < graph->vertex_count; ++v) {
         if (!topology->vertex_on_boundary[v])
@@ -282,20 +282,20 @@ static int edge_links(const pz_mesh *mesh, pz_trace_graph *graph, int32_t v, int
 {
     const double *nv = graph->vertex_normals + 3 * (size_t)v, *nw = graph->vertex_normals + 3 * (size_t)w;
     double edge[3], at_v[3], at_w[3];
-    sub3(mesh->positions + 3 * (size_t)w, mesh->positions + 3 * (size_t)v, edge);
-    double length = sqrt(dot3(edge, edge));
+    pz_vec3_sub(mesh->positions + 3 * (size_t)w, mesh->positions + 3 * (size_t)v, edge);
+    double length = sqrt(pz_vec3_dot(edge, edge));
     tangent_unit(edge, nv, at_v);
     tangent_unit(edge, nw, at_w);
-    double match = graph->match_angle_deg * FIELD_PI / 180.0;
+    double match = graph->match_angle_deg * PZ_PI / 180.0;
     for (int k = 0; k < 4; ++k) {
         double arm[3], arm_w[3];
         pz_trace_arm_direction(graph, v, k, arm);
-        double angle_v = acos(fmax(-1.0, fmin(1.0, dot3(arm, at_v))));
+        double angle_v = acos(fmax(-1.0, fmin(1.0, pz_vec3_dot(arm, at_v))));
         if (angle_v > match + 1e-12)
             continue;
         int kw = (k + shift) % 4;
         pz_trace_arm_direction(graph, w, kw, arm_w);
-        double angle_w = acos(fmax(-1.0, fmin(1.0, dot3(arm_w, at_w))));
+        double angle_w = acos(fmax(-1.0, fmin(1.0, pz_vec3_dot(arm_w, at_w))));
         double drift = 0.5 * ((angle_v / match) * (angle_v / match) + (angle_w / match) * (angle_w / match));
         double weight = length * (1.0 + graph->drift_weight * drift);
         if (!(weight > 0.0))
@@ -337,9 +337,9 @@ static int build_neighbors(const pz_mesh *mesh, const pz_topology *topology, pz_
         for (int32_t i = first; i < first + count; ++i) {
             int32_t w = graph->neighbor_vertices[i];
             double d[3];
-            sub3(mesh->positions + 3 * (size_t)w, mesh->positions + 3 * (size_t)v, d);
+            pz_vec3_sub(mesh->positions + 3 * (size_t)w, mesh->positions + 3 * (size_t)v, d);
             graph->neighbor_shift[i] = (uint8_t)arm_shift(graph, v, w);
-            graph->neighbor_lengths[i] = sqrt(dot3(d, d));
+            graph->neighbor_lengths[i] = sqrt(pz_vec3_dot(d, d));
         }
     }
     return 1;

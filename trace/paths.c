@@ -32,7 +32,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "trace/trace.h"
-#include "field/internal.h"
+#include "core/vec.h"
 #include "trace/internal.h"
 
 #include <math.h>
@@ -259,8 +259,8 @@ static int path_from_chain(const search_scratch *s, int32_t count, pz_trace_path
 static double step_length(const pz_mesh *mesh, int32_t a, int32_t b)
 {
     double d[3];
-    sub3(mesh->positions + 3 * (size_t)b, mesh->positions + 3 * (size_t)a, d);
-    return sqrt(dot3(d, d));
+    pz_vec3_sub(mesh->positions + 3 * (size_t)b, mesh->positions + 3 * (size_t)a, d);
+    return sqrt(pz_vec3_dot(d, d));
 }
 
 void trace_path_measure(const pz_trace_graph *graph, const pz_mesh *mesh, pz_trace_path *path)
@@ -334,8 +334,8 @@ static int32_t farthest_points(const pz_mesh *mesh, const int32_t *candidates, i
             centroid[k] += mesh->positions[3 * (size_t)candidates[i] + k] / count;
     for (int32_t i = 0; i < count; ++i) {
         double d[3];
-        sub3(mesh->positions + 3 * (size_t)candidates[i], centroid, d);
-        gap[i] = -dot3(d, d); /* first pick: the largest -distance = the nearest to the centroid */
+        pz_vec3_sub(mesh->positions + 3 * (size_t)candidates[i], centroid, d);
+        gap[i] = -pz_vec3_dot(d, d); /* first pick: the largest -distance = the nearest to the centroid */
     }
     int32_t chosen_count = 0;
     while (chosen_count < wanted && chosen_count < count) {
@@ -349,8 +349,8 @@ static int32_t farthest_points(const pz_mesh *mesh, const int32_t *candidates, i
         const double *p = mesh->positions + 3 * (size_t)candidates[best];
         for (int32_t i = 0; i < count; ++i) {
             double d[3];
-            sub3(mesh->positions + 3 * (size_t)candidates[i], p, d);
-            double d2 = dot3(d, d);
+            pz_vec3_sub(mesh->positions + 3 * (size_t)candidates[i], p, d);
+            double d2 = pz_vec3_dot(d, d);
             if (chosen_count == 1 || d2 < gap[i])
                 gap[i] = d2;
         }
@@ -426,10 +426,10 @@ static pz_status candidate_settings_resolve(const pz_trace_graph *graph, const p
                         o.threads);
     double lo[3], hi[3], d[3];
     pz_mesh_bbox(mesh, lo, hi);
-    sub3(hi, lo, d);
+    pz_vec3_sub(hi, lo, d);
     out->interior_sources = o.loops < 0 ? 0 : o.interior_sources ? o.interior_sources : TRACE_DEFAULT_INTERIOR_SOURCES;
     out->border_sources = o.border < 0 ? 0 : o.border_sources ? o.border_sources : TRACE_DEFAULT_BORDER_SOURCES;
-    out->max_length = (o.max_length_factor ? o.max_length_factor : TRACE_DEFAULT_MAX_LENGTH_FACTOR) * sqrt(dot3(d, d));
+    out->max_length = (o.max_length_factor ? o.max_length_factor : TRACE_DEFAULT_MAX_LENGTH_FACTOR) * sqrt(pz_vec3_dot(d, d));
     /* Candidates on the shared garments have cost / length <= 1.64 (drift weight 2): a search may stop at 2x. */
     out->max_cost = out->max_length * (1.0 + 0.5 * graph->drift_weight);
     out->threads = o.threads ? o.threads : omp_get_max_threads();

@@ -14,7 +14,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "trace/trace.h"
-#include "field/internal.h"
+#include "core/vec.h"
 #include "trace/internal.h"
 
 #include <math.h>
@@ -64,8 +64,8 @@ static int walker_init(walker *w, const pz_mesh *mesh, const pz_topology *topolo
 static double vertex_distance(const pz_mesh *mesh, int32_t a, int32_t b)
 {
     double d[3];
-    sub3(mesh->positions + 3 * (size_t)a, mesh->positions + 3 * (size_t)b, d);
-    return sqrt(dot3(d, d));
+    pz_vec3_sub(mesh->positions + 3 * (size_t)a, mesh->positions + 3 * (size_t)b, d);
+    return sqrt(pz_vec3_dot(d, d));
 }
 
 /*
@@ -161,7 +161,7 @@ static void path_arms_and_cost(const pz_trace_graph *graph, const pz_mesh *mesh,
         int32_t before = i > 0 ? i - 1 : path->closed ? count - 1 : 0;
         int32_t after = i + 1 < count ? i + 1 : path->closed ? 0 : count - 1;
         double tangent[3];
-        sub3(mesh->positions + 3 * (size_t)path->vertices[after], mesh->positions + 3 * (size_t)path->vertices[before],
+        pz_vec3_sub(mesh->positions + 3 * (size_t)path->vertices[after], mesh->positions + 3 * (size_t)path->vertices[before],
              tangent);
         path->arms[i] = (uint8_t)pz_trace_closest_arm(graph, path->vertices[i], tangent);
     }
@@ -237,8 +237,8 @@ static int32_t nearest_vertex(const pz_mesh *mesh, const pz_topology *topology, 
         if (topology->vertex_halfedge[v] < 0)
             continue;
         double d[3];
-        sub3(mesh->positions + 3 * (size_t)v, p, d);
-        double d2 = dot3(d, d);
+        pz_vec3_sub(mesh->positions + 3 * (size_t)v, p, d);
+        double d2 = pz_vec3_dot(d, d);
         if (d2 < best_d2)
             best_d2 = d2, best = v;
     }

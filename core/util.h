@@ -1,10 +1,11 @@
 /*
- * mesh/internal.h -- small helpers shared by the files of mesh/ (not public).
+ * core/util.h -- small containers shared by every stage (header only):
+ * growing arrays and union-find.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#ifndef PZ_MESH_INTERNAL_H
-#define PZ_MESH_INTERNAL_H
+#ifndef PZ_CORE_UTIL_H
+#define PZ_CORE_UTIL_H
 
 #include <stddef.h>
 #include <stdint.h>
@@ -51,4 +52,4 @@ static inline void pz_union_find_join(int32_t *parent, int32_t a, int32_t b)
         parent[a > b ? a : b] = a < b ? a : b;
 }
 
-#endif /* PZ_MESH_INTERNAL_H */
+#endif /* PZ_CORE_UTIL_H */

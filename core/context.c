@@ -1,11 +1,11 @@
 /*
- * mesh/context.c -- status codes, the error context, logging, timing and
- * atomic output files.
+ * core/context.c -- status codes, the error context, logging, progress,
+ * cancellation, timing and atomic output files.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
-#include "mesh.h"
+#include "core/core.h"
 
 #include <errno.h>
 #include <stdarg.h>
@@ -25,6 +25,7 @@ const char *pz_status_str(pz_status status)
     case PZ_ERR_CREATE: return "cannot create output";
     case PZ_ERR_NOMEM: return "out of memory";
     case PZ_ERR_INTERNAL: return "internal error";
+    case PZ_ERR_CANCELLED: return "cancelled";
     }
     return "unknown status";
 }
@@ -40,13 +41,54 @@ int pz_status_exit_code(pz_status status)
     case PZ_ERR_CREATE: return 73;         /* EX_CANTCREAT */
     case PZ_ERR_NOMEM:
     case PZ_ERR_INTERNAL: return 70;       /* EX_SOFTWARE */
+    case PZ_ERR_CANCELLED: return 130;     /* 128 + SIGINT, as shells report an interrupted command */
     }
     return 70;
+}
+
+const char *pz_version(void)
+{
+    return PZ_VERSION_STRING;
 }
 
 void pz_ctx_init(pz_ctx *ctx)
 {
     memset(ctx, 0, sizeof *ctx);
+}
+
+void pz_ctx_quiet(const pz_ctx *parent, pz_ctx *child)
+{
+    memset(child, 0, sizeof *child);
+    child->quiet = 1;
+    child->cancel = parent ? parent->cancel : NULL;
+}
+
+int pz_cancelled(const pz_ctx *ctx)
+{
+    return ctx && ctx->cancel && *ctx->cancel;
+}
+
+pz_status pz_check_cancel(pz_ctx *ctx, const char *what)
+{
+    if (!pz_cancelled(ctx))
+        return PZ_OK;
+    return pz_error(ctx, PZ_ERR_CANCELLED, "%s: cancelled", what);
+}
+
+void pz_progress(pz_ctx *ctx, const char *stage, double fraction, const char *fmt, ...)
+{
+    if (!ctx || ctx->quiet || !ctx->progress)
+        return;
+    char message[256];
+    va_list args;
+    va_start(args, fmt);
+    vsnprintf(message, sizeof message, fmt, args);
+    va_end(args);
+    if (fraction < 0)
+        fraction = 0;
+    if (fraction > 1)
+        fraction = 1;
+    ctx->progress(ctx->progress_user, stage, fraction, message);
 }
 
 pz_status pz_error(pz_ctx *ctx, pz_status status, const char *fmt, ...)
