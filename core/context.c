@@ -112,6 +112,9 @@ void pz_note(pz_ctx *ctx, const char *fmt, ...)
         return;
     va_list args;
     va_start(args, fmt);
+    /* A progress line may be drawn on the terminal (ctx->progress is only set there): clear it first. */
+    if (ctx && ctx->progress)
+        fputs("\r\033[K", stderr);
     fputs("panelize: ", stderr);
     vfprintf(stderr, fmt, args);
     fputc('\n', stderr);

@@ -723,6 +723,11 @@ static void summarize(pz_metrics *m)
         m->max_seam_mismatch_rel = fmax(m->max_seam_mismatch_rel, m->seams[s].mismatch_rel);
 }
 
+pz_fabric pz_fabric_default(void)
+{
+    return (pz_fabric){0.946, 0.548, 0.159};
+}
+
 pz_status pz_metrics_compute(const pz_pattern *pattern, const double *uv, int pose, const pz_fabric *fabric,
                              pz_metrics **out, pz_ctx *ctx)
 {
@@ -732,7 +737,7 @@ pz_status pz_metrics_compute(const pz_pattern *pattern, const double *uv, int po
         return pz_error(ctx, PZ_ERR_USAGE, "metrics: pose %d does not exist (the pattern has %d extra poses)", pose,
                         (int)mesh->pose_count);
     const double *positions = pose == 0 ? mesh->positions : mesh->poses + (size_t)(pose - 1) * mesh->vertex_count * 3;
-    pz_fabric constants = {0.946, 0.548, 0.159};
+    pz_fabric constants = pz_fabric_default();
     if (fabric) {
         constants.k_su = fabric->k_su > 0 ? fabric->k_su : constants.k_su;
         constants.k_sv = fabric->k_sv > 0 ? fabric->k_sv : constants.k_sv;

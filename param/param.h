@@ -323,6 +323,9 @@ typedef struct pz_fabric {
     double k_r;    /* shear stiffness, N/mm/rad; default 0.159 */
 } pz_fabric;
 
+/** The paper's constants (mccartney2005's woven cotton): the one place they are defined. */
+pz_fabric pz_fabric_default(void);
+
 typedef struct pz_panel_metrics {
     int32_t panel;
     int32_t face_count;

@@ -49,7 +49,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define DEFAULT_MAX_CORNERS 8
 /* Textile iterations of an evaluation: the strain settles within a few
  * local/global steps from the LSCM start (docs/segment.md). */
 #define DEFAULT_TEXTILE_ITERATIONS 5
@@ -593,15 +592,11 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
         out->darts = pattern->dart_count;
         out->min_dart_opening_deg = min_dart_opening(pattern, uv);
         out->max_abs_strain = worst_strain;
-        int32_t crossings = 0;
         for (int32_t p = 0; p < metrics->panel_count; ++p) {
             out->flipped_triangles += metrics->panels[p].flipped_triangles;
-            crossings += metrics->panels[p].boundary_self_intersections;
+            out->boundary_self_intersections += metrics->panels[p].boundary_self_intersections;
         }
-        if (out->flipped_triangles > 0 || crossings > 0)
-            out->failures |= PZ_GOAL_NOT_INJECTIVE;
-        if (!(out->max_abs_strain <= options->max_strain))
-            out->failures |= PZ_GOAL_STRAIN;
+        out->failures = pz_goal_judge(options, out);
     }
     pz_metrics_free(&metrics);
     free(uv);
@@ -633,13 +628,10 @@ static pz_status evaluate_walk(panel_walk *w, const pz_goal_options *options, pz
     int32_t euler = opened_euler(w);
     if (!walk_outline(w, TURN_WINDOW_EDGES * mean_edge(w), &out->boundary_loops, &out->corners))
         return pz_error(ctx, PZ_ERR_NOMEM, "segment goals: out of memory");
-    int32_t max_corners = options->max_corners > 0 ? options->max_corners : DEFAULT_MAX_CORNERS;
-    if (components != 1 || out->boundary_loops != 1 || euler != 1)
-        out->failures |= PZ_GOAL_NOT_DISK;
-    if (out->corners > max_corners)
-        out->failures |= PZ_GOAL_CORNERS;
+    out->disk = components == 1 && out->boundary_loops == 1 && euler == 1;
+    out->failures = pz_goal_judge(options, out);
     /* A panel that fails on topology or corners must be split anyway: flattening it would only cost. */
-    return out->failures ? PZ_OK : flatten_panel(w, options, out, ctx);
+    return out->failures || options->textile_iterations < 0 ? PZ_OK : flatten_panel(w, options, out, ctx);
 }
 
 pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
@@ -653,6 +645,7 @@ pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint
         return pz_error(ctx, PZ_ERR_USAGE, "segment goals: negative strain or corner bound");
     memset(out, 0, sizeof *out);
     out->max_abs_strain = -1;
+    out->max_seam_mismatch = -1;
     out->min_dart_opening_deg = -1;
     panel_walk w;
     memset(&w, 0, sizeof w);
@@ -691,6 +684,44 @@ pz_status pz_segment_goals(const pz_mesh *mesh, const pz_topology *topology, con
     return status;
 }
 
+void pz_goal_options_default(pz_goal_options *goals)
+{
+    memset(goals, 0, sizeof *goals);
+    goals->max_corners = 8;
+    goals->max_strain = 0.05;
+    goals->grain[2] = 1;
+    goals->max_seam_mismatch = 0.005;
+}
+
+/* C when the options leave it 0 (the default's). */
+static int32_t corner_bound(const pz_goal_options *goals)
+{
+    if (goals && goals->max_corners > 0)
+        return goals->max_corners;
+    pz_goal_options defaults;
+    pz_goal_options_default(&defaults);
+    return defaults.max_corners;
+}
+
+unsigned pz_goal_judge(const pz_goal_options *goals, const pz_goal_result *figures)
+{
+    unsigned failures = figures->failures & PZ_GOAL_VETOED;
+    if (!figures->disk)
+        failures |= PZ_GOAL_NOT_DISK;
+    if (figures->corners > corner_bound(goals))
+        failures |= PZ_GOAL_CORNERS;
+    if (figures->max_abs_strain >= 0 || isnan(figures->max_abs_strain)) {
+        if (!(figures->max_abs_strain <= goals->max_strain))
+            failures |= PZ_GOAL_STRAIN;
+        if (figures->flipped_triangles > 0 || figures->boundary_self_intersections > 0)
+            failures |= PZ_GOAL_NOT_INJECTIVE;
+    }
+    if (goals->max_seam_mismatch > 0 && !(figures->max_seam_mismatch <= goals->max_seam_mismatch) &&
+        !(figures->max_seam_mismatch < 0))
+        failures |= PZ_GOAL_SEAM_MISMATCH;
+    return failures;
+}
+
 void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *options, char *buf, size_t size)
 {
     if (!buf || size == 0)
@@ -700,7 +731,7 @@ void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *optio
         snprintf(buf, size, "ok");
         return;
     }
-    int32_t max_corners = options && options->max_corners > 0 ? options->max_corners : DEFAULT_MAX_CORNERS;
+    int32_t max_corners = corner_bound(options);
     double max_strain = options ? options->max_strain : 0;
     size_t used = 0;
     const char *separator = "";
@@ -728,6 +759,9 @@ void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *optio
         else
             APPEND("outline self-intersects");
     }
+    if (result->failures & PZ_GOAL_SEAM_MISMATCH)
+        APPEND("seam mismatch %.2g%% > %g%%", 100 * result->max_seam_mismatch,
+               100 * (options ? options->max_seam_mismatch : 0));
     if (result->failures & PZ_GOAL_VETOED)
         APPEND("failed in the joint flattening");
 #undef APPEND

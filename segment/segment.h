@@ -97,25 +97,50 @@ enum pz_goal_failure {
     PZ_GOAL_CORNERS = 1u << 1,
     PZ_GOAL_STRAIN = 1u << 2,
     PZ_GOAL_NOT_INJECTIVE = 1u << 3,
-    PZ_GOAL_VETOED = 1u << 4     /* the caller's final flattening rejected this panel (pz_segment_options.vetoed) */
+    PZ_GOAL_VETOED = 1u << 4,    /* the caller's final flattening rejected this panel (pz_segment_options.vetoed) */
+    PZ_GOAL_SEAM_MISMATCH = 1u << 5  /* a seam's or dart's two sides differ by more than max_seam_mismatch */
 };
 
+/**
+ * The goals every panel is judged by (pietroni2022 Sec. 3.1, plus the seam
+ * lengths the pattern promises). pz_goal_options_default is the one place the
+ * defaults are defined.
+ */
 typedef struct pz_goal_options {
-    int32_t max_corners;         /* C; 0 = 8 */
-    double max_strain;           /* S: |strain| bound on every triangle (>= 0) */
-    double grain[3];             /* the warp axis in 3D (unit) */
-    int textile_iterations;      /* 0 = the default of docs/segment.md */
+    int32_t max_corners;         /* C; default 8 (0 = the default) */
+    double max_strain;           /* S: |strain| bound on every triangle (>= 0); default 0.05 */
+    double grain[3];             /* the warp axis in 3D (unit); default +z */
+    int textile_iterations;      /* an evaluation's flattening; 0 = the default of docs/segment.md;
+                                    < 0: shape only (disk and corners), no flattening */
+    double max_seam_mismatch;    /* relative length difference of a seam's or dart's two sides; default 0.005;
+                                    judged on the final pattern (an evaluation has no partner panels) */
 } pz_goal_options;
 
+/** C = 8, S = 0.05, seam mismatch 0.5 %, grain +z. */
+void pz_goal_options_default(pz_goal_options *goals);
+
+/** One panel's figures and the goals it misses. */
 typedef struct pz_goal_result {
-    unsigned failures;           /* enum pz_goal_failure bits; 0 = goals met */
+    unsigned failures;           /* enum pz_goal_failure bits; 0 = goals met (pz_goal_judge) */
+    int disk;                    /* 1: the panel, opened along its own slits, is a topological disk */
     int32_t corners;
     int32_t boundary_loops;
     double max_abs_strain;       /* worst |warp| or |weft| strain over the panel's triangles (-1: not flattened) */
     int32_t flipped_triangles;
+    int32_t boundary_self_intersections;
+    double max_seam_mismatch;    /* worst relative mismatch of the panel's seams and darts (-1: not measured) */
     int32_t darts;               /* dart slits of the panel (a slit with a tip inside) */
     double min_dart_opening_deg; /* smallest opening angle at a dart tip in the flattening, -1 none or not flattened */
 } pz_goal_result;
+
+/**
+ * The one goal judge: the failure bits of a panel's figures under `goals`
+ * (PZ_GOAL_VETOED is kept from figures->failures; every other bit is judged
+ * again). A figure not measured (strain or seam mismatch -1) is not judged.
+ * The segmentation's evaluations and the final verdict of panelize run both
+ * call it, so a goal added here counts everywhere.
+ */
+unsigned pz_goal_judge(const pz_goal_options *goals, const pz_goal_result *figures);
 
 /**
  * Evaluates one panel: the faces face_ids[0..count-1] of `mesh` (a valid
@@ -129,7 +154,8 @@ pz_status pz_segment_goals(const pz_mesh *mesh, const pz_topology *topology, con
                            const int32_t *face_ids, int32_t count, const pz_goal_options *options,
                            pz_goal_result *out, pz_ctx *ctx);
 
-/** "not a disk, 11 corners > 8, strain 0.071 > 0.05, 3 flipped triangles" into buf (goals met: "ok"). */
+/** "not a disk, 11 corners > 8, strain 0.071 > 0.05, 3 flipped triangles, seam mismatch 0.8% > 0.5%" into buf
+ * (goals met: "ok"). */
 void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *options, char *buf, size_t size);
 
 /* ------------------------------------------------------------------------ */

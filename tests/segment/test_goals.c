@@ -120,7 +120,8 @@ static void test_hemisphere(void)
     pz_goal_describe(&tight, &strict, text, sizeof text);
     CHECK(strstr(text, "strain 0.0") != NULL && strstr(text, "> 0.01") != NULL, "describe: %s", text);
     /* S = 0: a tiny strain keeps its digits ("strain 0.0000 > 0.0000" told nothing). */
-    pz_goal_result tiny = {PZ_GOAL_STRAIN, 0, 1, 3.25e-5, 0, 0, -1};
+    pz_goal_result tiny = {.failures = PZ_GOAL_STRAIN, .boundary_loops = 1, .max_abs_strain = 3.25e-5,
+                           .max_seam_mismatch = -1, .min_dart_opening_deg = -1};
     pz_goal_options zero = strict;
     zero.max_strain = 0;
     pz_goal_describe(&tiny, &zero, text, sizeof text);

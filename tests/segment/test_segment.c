@@ -84,7 +84,7 @@ static pz_segment_result *segment(const garment *g, double max_strain, int32_t m
 static int32_t check_panels(const garment *g, const pz_segment_result *result, double max_strain,
                             int32_t max_corners, const char *what)
 {
-    pz_goal_options goals = {max_corners, max_strain, {0, 0, 1}, 0};
+    pz_goal_options goals = {.max_corners = max_corners, .max_strain = max_strain, .grain = {0, 0, 1}};
     int32_t *ids = malloc((size_t)g->mesh->face_count * sizeof(int32_t));
     REQUIRE(ids, "out of memory");
     int32_t meeting = 0;

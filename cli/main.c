@@ -1,5 +1,5 @@
 /*
- * pipeline/main.c -- `panelize COMMAND ...`: the command table, the option
+ * cli/main.c -- `panelize COMMAND ...`: the command table, the option
  * parser and the helpers the commands share.
  *
  * Parsing is hand-written and table driven: every option is listed once in
@@ -15,7 +15,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "pipeline/cli.h"
+#include "cli/cli.h"
 
 #include <errno.h>
 #include <limits.h>
@@ -50,7 +50,7 @@ static const pz_cli_command command_table[] = {
          PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |
          PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |
          PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |
-         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_EXPORT,
+         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_EXPORT,
      pz_cli_run},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
@@ -113,6 +113,8 @@ static const option_spec option_table[] = {
     {"dxf-strict", 0, PZ_CLI_OPT_DXF_STRICT, 0},
     {"truing", 0, PZ_CLI_OPT_TRUING, 1},
     {"size", 0, PZ_CLI_OPT_SIZE, 1},
+    {"outputs", 0, PZ_CLI_OPT_OUTPUTS, 1},
+    {"max-seam-mismatch", 0, PZ_CLI_OPT_MAX_SEAM_MISMATCH, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 
@@ -132,7 +134,8 @@ static const char global_usage_tail[] =
     "  --json         machine-readable output on stdout\n"
     "\n"
     "exit codes: 0 ok, 64 usage, 65 bad or invalid mesh data, 66 cannot open an\n"
-    "input, 70 internal error, 73 cannot create an output. On failure exactly one\n"
+    "input, 70 internal error, 73 cannot create an output, 130 interrupted\n"
+    "(Ctrl-C). On failure exactly one\n"
     "line `panelize: FILE: problem` is printed on stderr. See docs/cli.md.\n";
 
 static void print_global_usage(FILE *stream)

@@ -1,5 +1,5 @@
 /*
- * pipeline/cmd_generate.c -- `panelize generate SHAPE -o FILE`.
+ * cli/cmd_generate.c -- `panelize generate SHAPE -o FILE`.
  *
  * Generates a synthetic garment or test surface with pz_generate and writes
  * it with pz_mesh_write (format by extension, each file atomic).
@@ -14,7 +14,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "pipeline/cli.h"
+#include "cli/cli.h"
 
 #include <stdlib.h>
 #include <string.h>

@@ -1,5 +1,5 @@
 /*
- * pipeline/cmd_field.c -- `panelize field MESH -o DIR`: the curvature-aligned
+ * cli/cmd_field.c -- `panelize field MESH -o DIR`: the curvature-aligned
  * cross-field (field/field.h, docs/field.md).
  *
  * Reads and validates the mesh (with --pose files), reads the --sketch file
@@ -12,7 +12,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
-#include "pipeline/cli.h"
+#include "cli/cli.h"
 
 #include "field/field.h"
 

@@ -1,27 +1,24 @@
 /*
- * tests/param/test_pattern_output.c -- the files of `panelize flatten` in
- * isolation: the panels, seam and dart readers (ids mapped through panel
- * files and unreferenced vertices; every malformed input refused with file
- * and line), the shelf layout (overlapping pieces are moved apart by
- * translations only; separate ones stay), exact coordinates in garment.obj
- * (read back through pz_mesh_read) and the SVG's groups.
+ * tests/pipeline/test_inputs.c -- the pipeline's input files and its shelf
+ * layout in isolation: the panels, seam and dart readers (ids mapped through
+ * panel files; unreferenced vertices refused; every malformed input refused
+ * with file and line), joining panel files, the shelf layout (overlapping
+ * pieces are moved apart by translations only; separate ones stay) and exact
+ * coordinates in garment.obj (read back through pz_mesh_read).
  *
- * pipeline/pattern_output.c belongs to the panelize executable, not to the
- * library, so it is compiled into this test directly; the one helper it takes
- * from pipeline/main.c (pz_cli_round) is defined here.
+ * The layout and the garment.obj writer are the pipeline's own (its private
+ * header); the readers are public (pipeline/pipeline.h).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
-#include "pipeline/pattern_output.c"
+#include "pipeline/internal.h"
 
 #include "test_files.h"
 
-double pz_cli_round(double value, int decimals)
-{
-    double scale = pow(10.0, decimals);
-    return isfinite(value) ? round(value * scale) / scale : value;
-}
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 static const char *write_temp(const char *name, const char *text)
 {
@@ -39,7 +36,7 @@ static void test_panel_file(void)
 {
     pz_ctx ctx = {0};
     int32_t panels[4], count = -1;
-    REQUIRE_OK(pz_flatten_read_panel_file(write_temp("ok.txt", "0\n1\r\n0\n2\n\n"), 4, panels, &count, &ctx), ctx);
+    REQUIRE_OK(pz_read_panel_file(write_temp("ok.txt", "0\n1\r\n0\n2\n\n"), 4, panels, &count, &ctx), ctx);
     CHECK(count == 3 && panels[0] == 0 && panels[1] == 1 && panels[2] == 0 && panels[3] == 2, "count %d", count);
 
     struct { const char *text, *expect; } bad[] = {
@@ -55,29 +52,29 @@ static void test_panel_file(void)
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         const char *path = write_temp("bad.txt", bad[i].text);
-        pz_status status = pz_flatten_read_panel_file(path, 4, panels, &count, &ctx);
+        pz_status status = pz_read_panel_file(path, 4, panels, &count, &ctx);
         CHECK(status == PZ_ERR_DATA && strstr(ctx.error, bad[i].expect) && strstr(ctx.error, path),
               "case %zu: %d %s", i, (int)status, ctx.error);
     }
-    CHECK(pz_flatten_read_panel_file("/nonexistent/panels.txt", 4, panels, &count, &ctx) == PZ_ERR_OPEN, "%s",
+    CHECK(pz_read_panel_file("/nonexistent/panels.txt", 4, panels, &count, &ctx) == PZ_ERR_OPEN, "%s",
           ctx.error);
 }
 
 /* ---------------------------------------------------------------- seams and darts */
 
-/* Two panel files of 4 vertices; raw vertex 3 is used by no face and dropped. */
+/* Two panel files of 4 vertices joined; vertex 3 is used by no face. */
 static const int32_t offsets[3] = {0, 4, 8};
-static const int32_t raw_to_garment[8] = {0, 1, 2, -1, 3, 4, 5, 6};
+static const uint8_t vertex_used[8] = {1, 1, 1, 0, 1, 1, 1, 1};
 
 static void test_seams(void)
 {
     pz_ctx ctx = {0};
-    pz_vertex_space two_files = {2, offsets, raw_to_garment, 2};
+    pz_vertex_space two_files = {2, offsets, vertex_used, 2};
     pz_seam seam;
-    REQUIRE_OK(pz_flatten_read_seam(write_temp("seam.txt", "0\n1\n0 1\n2 3\n"), &two_files, &seam, &ctx), ctx);
+    REQUIRE_OK(pz_read_seam_file(write_temp("seam.txt", "0\n1\n0 1\n2 3\n"), &two_files, &seam, &ctx), ctx);
     CHECK(seam.pair_count == 2 && seam.panel_a == 0 && seam.panel_b == 1, "pairs %d", (int)seam.pair_count);
-    /* side A ids are panel 0's, side B ids panel 1's (raw 4 + id, then the compaction). */
-    CHECK(seam.side_a[0] == 0 && seam.side_a[1] == 2 && seam.side_b[0] == 4 && seam.side_b[1] == 6,
+    /* side A ids are panel 0's, side B ids panel 1's (its file starts at joined vertex 4). */
+    CHECK(seam.side_a[0] == 0 && seam.side_a[1] == 2 && seam.side_b[0] == 5 && seam.side_b[1] == 7,
           "%d %d %d %d", (int)seam.side_a[0], (int)seam.side_a[1], (int)seam.side_b[0], (int)seam.side_b[1]);
     free(seam.side_a);
     free(seam.side_b);
@@ -95,15 +92,15 @@ static void test_seams(void)
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; ++i) {
         const char *path = write_temp("bad_seam.txt", bad[i].text);
-        pz_status status = pz_flatten_read_seam(path, &two_files, &seam, &ctx);
+        pz_status status = pz_read_seam_file(path, &two_files, &seam, &ctx);
         CHECK(status == PZ_ERR_DATA && strstr(ctx.error, bad[i].expect) && strstr(ctx.error, path) &&
                   !seam.side_a && !seam.side_b,
               "case %zu: %d %s", i, (int)status, ctx.error);
     }
     /* One garment file: ids are global, panel ids only range-checked. */
-    pz_vertex_space one_file = {1, (const int32_t[]){0, 8}, raw_to_garment, 2};
-    REQUIRE_OK(pz_flatten_read_seam(write_temp("seam1.txt", "1\n0\n7 0\n"), &one_file, &seam, &ctx), ctx);
-    CHECK(seam.side_a[0] == 6 && seam.side_b[0] == 0, "%d %d", (int)seam.side_a[0], (int)seam.side_b[0]);
+    pz_vertex_space one_file = {1, (const int32_t[]){0, 8}, vertex_used, 2};
+    REQUIRE_OK(pz_read_seam_file(write_temp("seam1.txt", "1\n0\n7 0\n"), &one_file, &seam, &ctx), ctx);
+    CHECK(seam.side_a[0] == 7 && seam.side_b[0] == 0, "%d %d", (int)seam.side_a[0], (int)seam.side_b[0]);
     free(seam.side_a);
     free(seam.side_b);
 }
@@ -111,11 +108,11 @@ static void test_seams(void)
 static void test_darts(void)
 {
     pz_ctx ctx = {0};
-    pz_vertex_space two_files = {2, offsets, raw_to_garment, 2};
+    pz_vertex_space two_files = {2, offsets, vertex_used, 2};
     pz_dart dart;
     const char *named = write_temp("patch_1_dart_0.txt", "2\n0 1\n");
-    REQUIRE_OK(pz_flatten_read_dart(named, &two_files, &dart, &ctx), ctx);
-    CHECK(dart.panel == 1 && dart.tip == 5 && dart.leg_a[0] == 3 && dart.leg_b[0] == 4 && dart.pair_count == 1,
+    REQUIRE_OK(pz_read_dart_file(named, &two_files, &dart, &ctx), ctx);
+    CHECK(dart.panel == 1 && dart.tip == 6 && dart.leg_a[0] == 4 && dart.leg_b[0] == 5 && dart.pair_count == 1,
           "panel %d tip %d", (int)dart.panel, (int)dart.tip);
     free(dart.leg_a);
     free(dart.leg_b);
@@ -123,24 +120,24 @@ static void test_darts(void)
     const char *plain = write_temp("dart.txt", "2\n0 1\n");
     char spec[600];
     snprintf(spec, sizeof spec, "0:%s", plain);
-    REQUIRE_OK(pz_flatten_read_dart(spec, &two_files, &dart, &ctx), ctx);
+    REQUIRE_OK(pz_read_dart_file(spec, &two_files, &dart, &ctx), ctx);
     CHECK(dart.panel == 0 && dart.tip == 2 && dart.leg_a[0] == 0 && dart.leg_b[0] == 1, "tip %d", (int)dart.tip);
     free(dart.leg_a);
     free(dart.leg_b);
 
-    CHECK(pz_flatten_read_dart(plain, &two_files, &dart, &ctx) == PZ_ERR_USAGE && strstr(ctx.error, plain),
+    CHECK(pz_read_dart_file(plain, &two_files, &dart, &ctx) == PZ_ERR_USAGE && strstr(ctx.error, plain),
           "no panel: %s", ctx.error);
     snprintf(spec, sizeof spec, "5:%s", plain);
-    CHECK(pz_flatten_read_dart(spec, &two_files, &dart, &ctx) == PZ_ERR_USAGE, "panel 5: %s", ctx.error);
+    CHECK(pz_read_dart_file(spec, &two_files, &dart, &ctx) == PZ_ERR_USAGE, "panel 5: %s", ctx.error);
     const char *far = write_temp("patch_7_dart_0.txt", "2\n0 1\n");
-    CHECK(pz_flatten_read_dart(far, &two_files, &dart, &ctx) == PZ_ERR_DATA && strstr(ctx.error, far), "%s",
+    CHECK(pz_read_dart_file(far, &two_files, &dart, &ctx) == PZ_ERR_DATA && strstr(ctx.error, far), "%s",
           ctx.error);
     const char *odd = write_temp("patch_0_dart_1.txt", "2\n0 1\n1\n");
-    CHECK(pz_flatten_read_dart(odd, &two_files, &dart, &ctx) == PZ_ERR_DATA && strstr(ctx.error, "line 3"), "%s",
+    CHECK(pz_read_dart_file(odd, &two_files, &dart, &ctx) == PZ_ERR_DATA && strstr(ctx.error, "line 3"), "%s",
           ctx.error);
     /* One garment file: no panel needed. */
-    pz_vertex_space one_file = {1, (const int32_t[]){0, 8}, raw_to_garment, 1};
-    REQUIRE_OK(pz_flatten_read_dart(plain, &one_file, &dart, &ctx), ctx);
+    pz_vertex_space one_file = {1, (const int32_t[]){0, 8}, vertex_used, 1};
+    REQUIRE_OK(pz_read_dart_file(plain, &one_file, &dart, &ctx), ctx);
     free(dart.leg_a);
     free(dart.leg_b);
 }
@@ -180,7 +177,7 @@ static void test_layout(void)
     pz_pattern *pattern = two_piece_pattern(uv);
     memcpy(before, uv, sizeof uv);
     int moved = 0;
-    REQUIRE_OK(pz_pattern_layout(pattern, uv, 20.0, &moved, &ctx), ctx);
+    REQUIRE_OK(pl_pattern_layout(pattern, uv, 20.0, &moved, &ctx), ctx);
     CHECK(moved == 1, "overlapping pieces were not moved");
     for (int piece = 0; piece < 2; ++piece)
         for (int v = 3 * piece + 1; v < 3 * piece + 3; ++v)
@@ -198,7 +195,7 @@ static void test_layout(void)
     CHECK(apart, "pieces still within the gap: x %g..%g and %g..%g", lo[0][0], hi[0][0], lo[1][0], hi[1][0]);
     /* Laid out once, they stay. */
     memcpy(before, uv, sizeof uv);
-    REQUIRE_OK(pz_pattern_layout(pattern, uv, 20.0, &moved, &ctx), ctx);
+    REQUIRE_OK(pl_pattern_layout(pattern, uv, 20.0, &moved, &ctx), ctx);
     CHECK(moved == 0 && memcmp(before, uv, sizeof uv) == 0, "separate pieces were moved");
     pz_pattern_free(&pattern);
 }
@@ -209,7 +206,7 @@ static void test_writers(void)
     double uv[12];
     pz_pattern *pattern = two_piece_pattern(uv);
     int moved;
-    REQUIRE_OK(pz_pattern_layout(pattern, uv, 20.0, &moved, &ctx), ctx);
+    REQUIRE_OK(pl_pattern_layout(pattern, uv, 20.0, &moved, &ctx), ctx);
     /* Coordinates that %.6f would not keep. */
     double positions[18];
     memcpy(positions, pattern->mesh->positions, sizeof positions);
@@ -219,7 +216,7 @@ static void test_writers(void)
     char path[512];
     FILE *file = fopen(test_temp_path(path, sizeof path, "garment.obj"), "w");
     REQUIRE(file != NULL, "cannot create %s", path);
-    REQUIRE_OK(pz_pattern_write_obj(file, pattern->mesh, positions, pattern, uv, &ctx), ctx);
+    REQUIRE_OK(pl_write_garment_obj(file, pattern->mesh, positions, pattern, uv, &ctx), ctx);
     fclose(file);
     pz_mesh *back = NULL;
     REQUIRE_OK(pz_mesh_read(path, &back, &ctx), ctx);
@@ -235,29 +232,12 @@ static void test_writers(void)
     CHECK(back->label_names && strcmp(back->label_names[back->face_labels[1]], "panel_1") == 0, "groups");
     pz_mesh_free(&back);
 
-    file = fopen(test_temp_path(path, sizeof path, "pattern.svg"), "w");
-    REQUIRE(file != NULL, "cannot create %s", path);
-    const char *names[2] = {"front & centre", NULL};
-    REQUIRE_OK(pz_pattern_write_svg(file, pattern, uv, names, &ctx), ctx);
-    fclose(file);
-    size_t size = 0;
-    char *svg = (char *)test_read_file(path, &size);
-    REQUIRE(svg != NULL, "cannot read %s", path);
-    svg[size] = '\0';
-    CHECK(strstr(svg, "<g id=\"panel_0\">") && strstr(svg, "<g id=\"panel_1\">"), "panel groups");
-    CHECK(strstr(svg, "front &amp; centre") != NULL, "names are escaped");
-    CHECK(strstr(svg, "mm\" height=\"") != NULL, "width in mm");
-    int outlines = 0;
-    for (const char *at = svg; (at = strstr(at, "class=\"outline\"")); ++at)
-        ++outlines;
-    CHECK(outlines == 2, "%d outlines", outlines);
-    free(svg);
     pz_pattern_free(&pattern);
 }
 
 int main(void)
 {
-    test_temp_dir_create("pz_pattern_output");
+    test_temp_dir_create("pz_pipeline_inputs");
     test_panel_file();
     test_seams();
     test_darts();

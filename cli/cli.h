@@ -1,5 +1,5 @@
 /*
- * pipeline/cli.h -- internal header of the panelize command line.
+ * cli/cli.h -- internal header of the panelize command line.
  *
  * The CLI is a table of commands (main.c). Each command names the options it
  * accepts; main.c parses the command line once into a pz_cli_args (both
@@ -18,7 +18,7 @@
 #ifndef PZ_CLI_H
 #define PZ_CLI_H
 
-#include "mesh/mesh.h"
+#include "pipeline/pipeline.h"
 
 #include <cjson/cJSON.h>
 
@@ -67,10 +67,12 @@
 #define PZ_CLI_OPT_DXF_STRICT (UINT64_C(1) << 37) /* --dxf-strict (a flag: stored as the value "1") */
 #define PZ_CLI_OPT_TRUING (UINT64_C(1) << 38) /* --truing on|off (run) */
 #define PZ_CLI_OPT_SIZE (UINT64_C(1) << 39) /* --size NAME: the size printed on every piece */
+#define PZ_CLI_OPT_OUTPUTS (UINT64_C(1) << 40) /* --outputs LIST: the files to write (flatten, run) */
+#define PZ_CLI_OPT_MAX_SEAM_MISMATCH (UINT64_C(1) << 41) /* --max-seam-mismatch R (run) */
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 31
+#define PZ_CLI_VALUE_COUNT 33
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;
@@ -82,7 +84,8 @@ static inline int pz_cli_value_index(uint64_t flag)
 /** The pattern-file options of `flatten` and `run` (export/export.h). */
 #define PZ_CLI_OPT_EXPORT                                                                                   \
     (PZ_CLI_OPT_SEAM_ALLOWANCE | PZ_CLI_OPT_HEM_ALLOWANCE | PZ_CLI_OPT_ALLOWANCES | PZ_CLI_OPT_NOTCH_SPACING | \
-     PZ_CLI_OPT_PAPER | PZ_CLI_OPT_FABRIC_WIDTH | PZ_CLI_OPT_GAP | PZ_CLI_OPT_DXF_STRICT | PZ_CLI_OPT_SIZE)
+     PZ_CLI_OPT_PAPER | PZ_CLI_OPT_FABRIC_WIDTH | PZ_CLI_OPT_GAP | PZ_CLI_OPT_DXF_STRICT | PZ_CLI_OPT_SIZE |      \
+     PZ_CLI_OPT_OUTPUTS)
 
 /** Options every command takes. */
 #define PZ_CLI_OPT_COMMON (PZ_CLI_OPT_QUIET | PZ_CLI_OPT_JSON)
@@ -180,6 +183,43 @@ void pz_cli_mesh_to_mm(const pz_cli_args *args, pz_mesh *mesh, pz_units *units_u
  */
 void pz_cli_warn_units(const pz_cli_args *args, const char *path, const pz_mesh *mesh, pz_units used,
                        pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- flatten and run (cli/options.c) */
+
+/**
+ * The options `flatten` and `run` share, from args into *options (set to the
+ * library's defaults first): --units, --repair, --backend and its options,
+ * --iterations, --weights, --fabric, --grain, the pattern-file options, -o
+ * and the positional MESH. PZ_ERR_USAGE naming the option otherwise; checked
+ * before any file is read.
+ */
+pz_status pz_cli_pipeline_options(const pz_cli_args *args, pz_run_options *options, pz_ctx *ctx);
+
+/**
+ * The positional MESH with its --pose files, or several panel files joined
+ * (pz_mesh_join); file_vertex_offset (positional_count + 1, may be NULL)
+ * receives where each file's vertices start. The mesh is in its files' units.
+ */
+pz_status pz_cli_read_meshes(const pz_cli_args *args, pz_mesh **mesh, int32_t *file_vertex_offset, pz_ctx *ctx);
+
+/** The files to write: --outputs, or all. */
+pz_status pz_cli_outputs(const pz_cli_args *args, unsigned *outputs, pz_ctx *ctx);
+
+/**
+ * Writes the result's files into -o (all or nothing), then prints report.json
+ * (--json) or the summary on stdout and the timings note on stderr.
+ * read_ms: the time the command spent reading its inputs.
+ */
+pz_status pz_cli_write_result(const pz_cli_args *args, pz_result *result, double read_ms, pz_ctx *ctx);
+
+/**
+ * Progress on a terminal and Ctrl-C: when stderr is a terminal and --quiet is
+ * not given, ctx->progress draws one updating line; SIGINT and SIGTERM set the
+ * context's cancel flag so the library stops at its next check (exit 130).
+ * pz_cli_progress_end clears the line and restores the signal handlers.
+ */
+void pz_cli_progress_begin(const pz_cli_args *args, pz_ctx *ctx);
+void pz_cli_progress_end(pz_ctx *ctx);
 
 /** Milliseconds between two pz_seconds() readings, rounded to microseconds. */
 double pz_cli_elapsed_ms(double start, double end);

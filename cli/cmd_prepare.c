@@ -1,5 +1,5 @@
 /*
- * pipeline/cmd_prepare.c -- `panelize prepare MESH -o OUT`: scan-ready input
+ * cli/cmd_prepare.c -- `panelize prepare MESH -o OUT`: scan-ready input
  * (mesh/prepare.c, docs/prepare.md): weld, repair, drop fragments, decimate,
  * remesh, carry the poses over, report the Hausdorff distance.
  *
@@ -15,7 +15,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "pipeline/cli.h"
+#include "cli/cli.h"
 
 #include <errno.h>
 #include <math.h>

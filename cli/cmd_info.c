@@ -1,5 +1,5 @@
 /*
- * pipeline/cmd_info.c -- `panelize info` and `panelize check`.
+ * cli/cmd_info.c -- `panelize info` and `panelize check`.
  *
  * info describes a mesh and never refuses one that parses: it reads the mesh
  * and its poses, converts to millimetres, validates, and reports what holds.
@@ -18,7 +18,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "pipeline/cli.h"
+#include "cli/cli.h"
 
 #include <math.h>
 #include <stdlib.h>

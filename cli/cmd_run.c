@@ -1,0 +1,212 @@
+/*
+ * cli/cmd_run.c -- `panelize run GARMENT -o DIR`: the whole pipeline, garment
+ * in, sewable pattern out, no hand work (docs/run.md). A caller of pz_run
+ * (pipeline/pipeline.h): this file turns argv into options, reads the files,
+ * and writes the result; no algorithm lives here.
+ *
+ * With --panels the user's own panels are flattened and segmentation is
+ * skipped (so is preparation, which would renumber the faces the panels
+ * refer to); the goals are still judged.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "cli/cli.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char pz_cli_run_usage[] =
+    "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S]\n"
+    "           [--pose FILE]... [--sketch FILE] [--panels FILE|uv]\n"
+    "           [--symmetry auto|off|x|y|z] [--darts on|off] [--truing on|off] [--grain X,Y,Z]\n"
+    "           [--prepare auto|off] [--backend textile|lscm|wirewarp|springmass]\n"
+    "           [--iterations N] [--weights S,R,D,M] [--fabric KSU,KSV,KR]\n"
+    "           [--seam-allowance MM] [--hem-allowance MM] [--allowances FILE]\n"
+    "           [--notch-spacing MM] [--paper a4|letter] [--dxf-strict]\n"
+    "           [--fabric-width MM] [--gap MM] [--size NAME] [--outputs LIST]\n"
+    "           [--max-seam-mismatch R] [--units U] [--repair]\n"
+    "           [--json] [--quiet]\n"
+    "\n"
+    "Cuts a 3D garment into panels along field-aligned seams, adds darts and\n"
+    "flattens every panel into a sewable pattern. Writes into DIR everything\n"
+    "`panelize flatten` writes (garment.obj, the pattern files, report.json)\n"
+    "plus layout.obj, the seams and darts as polylines on the 3D garment.\n"
+    "\n"
+    "options:\n"
+    "  -o DIR               the output directory (required)\n"
+    "  --max-corners C      at most C corners per panel (default 8)\n"
+    "  --max-strain S       every triangle's warp and weft strain within +-S\n"
+    "                       (default 0.05: 5% in tension or compression)\n"
+    "  --max-seam-mismatch R  every seam's and dart's two sides within R of their\n"
+    "                       length (default 0.005: 0.5%)\n"
+    "  --symmetry M         auto (default: detect a mirror plane), off, x, y or z\n"
+    "  --darts on|off       insert darts where a seam can be partly closed (default on)\n"
+    "  --truing on|off      smooth the seams traced along mesh edges into clean lines\n"
+    "                       by moving their vertices along the surface (default on;\n"
+    "                       off keeps garment.obj's positions exactly the input's)\n"
+    "  --sketch FILE        JSON {\"curves\": [[[x,y,z], ...], ...]} in the garment's\n"
+    "                       units: curves that become seams, never removed\n"
+    "  --panels FILE|uv     the user's own panels (see panelize flatten): no\n"
+    "                       segmentation, no preparation\n"
+    "  --prepare auto|off   auto (default): weld, repair and remesh the garment\n"
+    "                       only when it needs it (see panelize prepare)\n"
+    "  --grain X,Y,Z        the 3D warp direction (default: the garment's vertical)\n"
+    "  --pose FILE          an extra pose with the same connectivity (repeatable)\n"
+    "  --outputs LIST       the files to write (see panelize flatten --help; layout\n"
+    "                       adds layout.obj)\n"
+    "  other options        as in panelize flatten --help\n"
+    "\n"
+    "See docs/run.md.\n";
+
+/* One of the words in `names` (count of them) into *index; PZ_ERR_USAGE listing them otherwise. */
+static pz_status parse_word(const char *option, const char *text, const char *const *names, int count, int *index,
+                            pz_ctx *ctx)
+{
+    for (int i = 0; i < count; ++i)
+        if (strcmp(text, names[i]) == 0) {
+            *index = i;
+            return PZ_OK;
+        }
+    char list[128] = "";
+    size_t used = 0;
+    for (int i = 0; i < count && used < sizeof list; ++i)
+        used += (size_t)snprintf(list + used, sizeof list - used, "%s%s", i == 0 ? "" : i + 1 < count ? ", " : " or ",
+                                 names[i]);
+    return pz_error(ctx, PZ_ERR_USAGE, "run: %s: '%s' is not %s", option, text, list);
+}
+
+static pz_status parse_on_off(const char *option, const char *text, int *value, pz_ctx *ctx)
+{
+    static const char *const words[] = {"off", "on"};
+    return parse_word(option, text, words, 2, value, ctx);
+}
+
+/* The goals: --max-corners, --max-strain, --max-seam-mismatch. */
+static pz_status parse_goals(const pz_cli_args *args, pz_goal_options *goals, pz_ctx *ctx)
+{
+    const char *text;
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_CORNERS))) {
+        char *end = NULL;
+        errno = 0;
+        long corners = strtol(text, &end, 10);
+        if (end == text || *end || errno == ERANGE || corners < 1 || corners > 1000)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-corners: '%s' is not a whole number in 1..1000", text);
+        goals->max_corners = (int32_t)corners;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_STRAIN))) {
+        char *end = NULL;
+        errno = 0;
+        double strain = strtod(text, &end);
+        if (end == text || *end || errno == ERANGE || !isfinite(strain) || strain < 0 || strain > 10)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-strain: '%s' is not a number in 0..10", text);
+        goals->max_strain = strain;
+    }
+    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_SEAM_MISMATCH))) {
+        char *end = NULL;
+        errno = 0;
+        double mismatch = strtod(text, &end);
+        if (end == text || *end || errno == ERANGE || !isfinite(mismatch) || mismatch < 0 || mismatch > 1)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-seam-mismatch: '%s' is not a number in 0..1", text);
+        goals->max_seam_mismatch = mismatch;
+    }
+    return PZ_OK;
+}
+
+static pz_status parse_run_options(const pz_cli_args *args, pz_run_options *options, pz_ctx *ctx)
+{
+    pz_status status = parse_goals(args, &options->goals, ctx);
+    const char *text;
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SYMMETRY))) {
+        static const char *const names[] = {"auto", "off", "x", "y", "z"};
+        static const pz_symmetry_mode modes[] = {PZ_SYMMETRY_AUTO, PZ_SYMMETRY_OFF, PZ_SYMMETRY_X, PZ_SYMMETRY_Y,
+                                                 PZ_SYMMETRY_Z};
+        int index = 0;
+        if ((status = parse_word("--symmetry", text, names, 5, &index, ctx)) == PZ_OK)
+            options->segment.symmetry = modes[index];
+    }
+    if (status == PZ_OK && args->dart_path_count > 1)
+        return pz_error(ctx, PZ_ERR_USAGE, "run: --darts given twice");
+    if (status == PZ_OK && args->dart_path_count == 1)
+        status = parse_on_off("--darts", args->dart_paths[0], &options->segment.darts, ctx);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_PREPARE))) {
+        static const char *const modes[] = {"off", "auto"};
+        status = parse_word("--prepare", text, modes, 2, &options->prepare, ctx);
+    }
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_TRUING)))
+        status = parse_on_off("--truing", text, &options->truing, ctx);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SKETCH))) {
+        if (!*text)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --sketch: empty file name");
+        options->sketch_path = text;
+    }
+    if (status == PZ_OK && args->positional_count > 1)
+        status = pz_error(ctx, PZ_ERR_USAGE, "run: expected one GARMENT, got %d files", args->positional_count);
+    return status;
+}
+
+/* --panels FILE|uv: the user's panels (no segmentation, no preparation). */
+static pz_status read_panels(const pz_cli_args *args, const pz_mesh *mesh, pz_panels *panels, int32_t **face_panel,
+                             pz_ctx *ctx)
+{
+    const char *text = pz_cli_value(args, PZ_CLI_OPT_PANELS);
+    memset(panels, 0, sizeof *panels);
+    if (strcmp(text, "uv") == 0) {
+        panels->source = PZ_PANELS_UV;
+        return PZ_OK;
+    }
+    *face_panel = malloc(((size_t)mesh->face_count + 1) * sizeof(int32_t));
+    if (!*face_panel)
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory finding panels");
+    panels->source = PZ_PANELS_FACES;
+    panels->face_panel = *face_panel;
+    panels->face_panel_name = text;
+    return pz_read_panel_file(text, mesh->face_count, *face_panel, &panels->panel_count, ctx);
+}
+
+/* Messages from the shared steps say "flatten:"; name the command that ran. */
+static void rename_message(pz_ctx *ctx)
+{
+    if (strncmp(ctx->error, "flatten: ", 9) != 0)
+        return;
+    char message[sizeof ctx->error];
+    snprintf(message, sizeof message, "%s", ctx->error + 9);
+    snprintf(ctx->error, sizeof ctx->error, "run: %.*s", (int)(sizeof message - 16), message);
+}
+
+pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx)
+{
+    pz_run_options options;
+    pz_status status = pz_cli_pipeline_options(args, &options, ctx);
+    if (status == PZ_OK)
+        status = parse_run_options(args, &options, ctx);
+    if (status != PZ_OK) {
+        rename_message(ctx);
+        return status;
+    }
+    double start = pz_seconds();
+    pz_mesh *mesh = NULL;
+    pz_panels panels;
+    int32_t *face_panel = NULL;
+    status = pz_cli_read_meshes(args, &mesh, NULL, ctx);
+    if (status == PZ_OK && pz_cli_value(args, PZ_CLI_OPT_PANELS)) {
+        status = read_panels(args, mesh, &panels, &face_panel, ctx);
+        options.panels = &panels;
+    }
+    double read_ms = pz_cli_elapsed_ms(start, pz_seconds());
+    pz_result *result = NULL;
+    pz_cli_progress_begin(args, ctx);
+    if (status == PZ_OK)
+        status = pz_run(mesh, &options, &result, ctx);
+    pz_mesh_free(&mesh);
+    free(face_panel);
+    if (status == PZ_OK)
+        status = pz_cli_write_result(args, result, read_ms, ctx);
+    pz_cli_progress_end(ctx);
+    pz_result_free(&result);
+    if (status != PZ_OK)
+        rename_message(ctx);
+    return status;
+}

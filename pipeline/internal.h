@@ -1,0 +1,192 @@
+/*
+ * pipeline/internal.h -- what the files of pipeline/ share (not public).
+ *
+ *   inputs.c       panel, seam, dart and feature-curve files; joining panel files
+ *   load.c         the load stage: the caller's mesh copied, in millimetres,
+ *                  prepared (pz_run), repaired and validated
+ *   panels.c       the user's panels (groups, labels, uv, per-face ids) and
+ *                  their seams and darts mapped onto the prepared garment
+ *   segmentation.c the automatic layout with its verdict rounds and the
+ *                  looser goal settings that keep panel counts monotone
+ *   flatten.c      the chosen back-end, the pieces laid out, metrics
+ *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
+ *                  pattern's mirror symmetry
+ *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
+ *   report.c       report.json (pz_result_report)
+ *   write.c        pz_result_write: every file, all or nothing
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_PIPELINE_INTERNAL_H
+#define PZ_PIPELINE_INTERNAL_H
+
+#include "pipeline/pipeline.h"
+
+/* Space between pieces when a back-end's pieces overlap and are laid out again (mm). */
+#define PL_LAYOUT_GAP_MM 20.0
+
+/** Milliseconds between two pz_seconds() readings, rounded to microseconds. */
+double pl_elapsed_ms(double start, double end);
+
+/** Rounds to `decimals` decimals so JSON numbers print short. */
+double pl_round(double value, int decimals);
+
+/** The base name of a path without its extension (malloc'd; NULL when out of memory). */
+char *pl_base_name(const char *path);
+
+/** "run" or "flatten": the first word of the pipeline's messages. */
+const char *pl_who(const pz_result *result);
+
+/* ---------------------------------------------------------------- inputs.c */
+
+/** Feature curves read from a features file (points in mm). */
+typedef struct pl_feature_file {
+    int32_t curve_count;
+    pz_feature_polyline *polylines;   /* curve_count; points point into `points` */
+    double *points;                   /* every curve's points, x 3 */
+} pl_feature_file;
+
+/**
+ * A features file: JSON {"curves":[{"kind":"key"|"accessory","points":
+ * [[x,y,z],...]}]} with at least one curve of at least two points, in the
+ * input's units; mm_per_unit converts to millimetres like the mesh.
+ * PZ_ERR_OPEN when unreadable; PZ_ERR_DATA naming the file and the line (not
+ * JSON) or the curve and point (wrong shape) otherwise.
+ */
+pz_status pl_read_features(const char *path, double mm_per_unit, pl_feature_file *out, pz_ctx *ctx);
+void pl_feature_file_clear(pl_feature_file *features);
+
+/* ---------------------------------------------------------------- load.c */
+
+/** The caller's mesh as the pipeline works on it, and how its ids map onto it. */
+typedef struct pl_garment {
+    pz_mesh *mesh;                /* prepared, millimetres (moved into the result at the end) */
+    int32_t raw_vertex_count, raw_face_count;
+    int32_t *raw_to_garment;      /* raw_vertex_count: the prepared vertex, or -1 when no face used it */
+    int ids_preserved;            /* only unreferenced vertices were dropped: the caller's ids map exactly */
+} pl_garment;
+
+/**
+ * The load stage: copies `input`, converts it to millimetres
+ * (options->units), runs the automatic preparation when `prepare` is set
+ * (its report goes to result->prepared), applies options->repair_flags and
+ * validates (PZ_ERR_INVALID_MESH naming options->name). Fills
+ * result->positions_out, units, units_guessed, grain and grain_source.
+ */
+pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepare, pz_result *result,
+                  pl_garment *garment, pz_ctx *ctx);
+void pl_garment_clear(pl_garment *garment);
+
+/* ---------------------------------------------------------------- panels.c */
+
+/** Panels chosen for one flattening: per-face ids, names, extra cuts (all owned). */
+typedef struct pl_panel_choice {
+    const char *source;           /* "segmentation", "file", "uv", "files", "groups", "components" (static) */
+    int32_t *face_panel;          /* face_count */
+    int32_t panel_count;
+    uint8_t *extra_cuts;          /* flags over pz_topology_build(garment)'s edges, or NULL */
+    char **names;                 /* panel_count entries (may be NULL), or NULL */
+} pl_panel_choice;
+
+void pl_panel_choice_clear(pl_panel_choice *choice);
+void pl_panel_choice_drop_names(pl_panel_choice *choice);
+
+/** The user's panels (panels NULL: groups) on the loaded garment. */
+pz_status pl_user_panels(const pz_panels *panels, const pl_garment *garment, const pz_result *result,
+                         pl_panel_choice *choice, pz_ctx *ctx);
+
+/** The user's seams and darts in the loaded garment's vertex ids (*out cleared with pz_correspondences_clear). */
+pz_status pl_user_correspondences(const pz_panels *panels, const pl_garment *garment, int32_t panel_count,
+                                  pz_correspondences *out, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- segmentation.c */
+
+/** The automatic layout's state across verdict rounds (opaque). */
+typedef struct pl_segmenter pl_segmenter;
+
+pz_status pl_segmenter_create(const pz_run_options *options, const pz_prepare_result *prepared, const double grain[3],
+                              pl_segmenter **out, pz_ctx *ctx);
+void pl_segmenter_free(pl_segmenter **segmenter);
+
+/**
+ * The automatic panels of `garment` (its vertices may move along the surface:
+ * seam truing). Called again after pl_segmenter_accept said no, it makes the
+ * layout again with the rejected panels vetoed.
+ */
+pz_status pl_segmenter_choose(pl_segmenter *segmenter, pz_mesh *garment, pl_panel_choice *choice, pz_ctx *ctx);
+
+/** The verdict round: 1 accepts the flattening (uv) of the panels last chosen, 0 asks for a new layout. */
+int pl_segmenter_accept(pl_segmenter *segmenter, const pz_pattern *pattern, const double *uv, pz_ctx *ctx);
+
+/** Moves what the run reports (segmentation, field, truing, rounds, ladder) into the result. */
+void pl_segmenter_report(pl_segmenter *segmenter, pz_result *result);
+
+/* ---------------------------------------------------------------- flatten.c */
+
+/**
+ * Flattens every panel of `pattern` with the back-end of options->flatten
+ * (grain: result->grain), strain goal strain_limit (0: none), writing uv
+ * (2 per pattern vertex, zeroed by the caller) and result->backend.
+ */
+pz_status pl_flatten_pattern(const pz_run_options *options, const pz_pattern *pattern, double mm_per_unit,
+                             const double grain[3], double strain_limit, double *uv, pz_backend_outcome *outcome,
+                             pz_ctx *ctx);
+
+/**
+ * The flattening the segmentation's verdict judges a looser goal setting
+ * with: the run's own back-end when it is textile or lscm, textile otherwise.
+ */
+pz_status pl_flatten_for_verdict(const pz_run_options *options, const pz_pattern *pattern, const double grain[3],
+                                 double strain_limit, double *uv, pz_ctx *ctx);
+
+/** One warning line per thing a user should know about a best-effort WireWarping. */
+void pl_warn_wirewarp(const pz_run_options *options, const pz_backend_outcome *outcome, pz_ctx *ctx);
+
+void pl_backend_outcome_clear(pz_backend_outcome *outcome);
+
+/**
+ * When the bounding boxes of two panels overlap, translates every panel into
+ * rows (shelves, tallest first) with gap_mm between pieces; a layout without
+ * overlaps is kept as the back-end made it. uv changed in place; sets *moved.
+ */
+pz_status pl_pattern_layout(const pz_pattern *pattern, double *uv, double gap_mm, int *moved, pz_ctx *ctx);
+
+/** metrics[0] on the rest pose, metrics[p] on extra pose p (count = 1 + poses). */
+pz_status pl_measure(const pz_pattern *pattern, const double *uv, const pz_fabric *fabric, pz_metrics **metrics,
+                     int count, pz_ctx *ctx);
+
+/** Each panel's worst |warp| or |weft| strain over the extra poses; NULL when out of memory (caller frees). */
+double *pl_strain_of_poses(const pz_pattern *pattern, const double *uv, const pz_fabric *fabric, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- verdict.c */
+
+/**
+ * Judges every panel of `pattern` against `goals` with the one goal judge:
+ * disk and corners on the garment's cut outline, strain and injectivity on
+ * the flattening (metrics: the rest pose; pose_strain, may be NULL: each
+ * panel's worst strain over the extra poses), seam and dart length mismatch
+ * from the metrics. panels (pattern->panel_count) receives each panel's
+ * figures and failure bits.
+ */
+pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const pz_metrics *metrics,
+                          const double *pose_strain, const pz_goal_options *goals, pz_goal_result *panels, pz_ctx *ctx);
+
+/** The final verdict of a result (goals met, reasons, one note when missed) from its metrics. */
+pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx);
+
+/** The flattened pieces' own mirror symmetry (result->pattern_mirror_*), when the layout found a plane. */
+void pl_measure_pattern_symmetry(pz_result *result, pz_ctx *ctx);
+
+/** The garment's faces bucketed by pattern panel (CSR); 0 when out of memory. The caller frees both. */
+int pl_faces_by_panel(const pz_pattern *pattern, int32_t **offsets, int32_t **order);
+
+/* ---------------------------------------------------------------- report.c, write.c */
+
+/** layout.obj: the layout curves on the garment, in the input's units. */
+pz_status pl_write_layout_obj(const pz_result *result, FILE *file, pz_ctx *ctx);
+
+/** garment.obj: `v` = positions_out, `vt` = uv, the garment's faces with `g panel_K` groups. */
+pz_status pl_write_garment_obj(FILE *file, const pz_mesh *garment, const double *positions,
+                               const pz_pattern *pattern, const double *uv, pz_ctx *ctx);
+
+#endif /* PZ_PIPELINE_INTERNAL_H */

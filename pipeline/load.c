@@ -1,0 +1,176 @@
+/*
+ * pipeline/load.c -- the load stage: the caller's mesh copied (it stays the
+ * caller's, unchanged), converted to millimetres, prepared when the run asks
+ * for it (weld, repair, remesh: prepare/), repaired as the options ask and
+ * validated.
+ *
+ * Vertex ids: the user's panels, seams and darts name the caller's vertices
+ * and faces, so the map from the caller's ("raw") ids to the prepared
+ * garment's is kept: dropping unreferenced vertices is a known compaction;
+ * any other change (a repair that drops faces, the automatic preparation)
+ * means the ids no longer apply, and ids_preserved says so.
+ *
+ * garment.obj keeps the input's coordinates exactly: positions_out holds the
+ * caller's own numbers while the ids still match (x * 10 / 10 need not give
+ * x back), and the prepared positions in the input's units otherwise.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "pipeline/internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+void pl_garment_clear(pl_garment *garment)
+{
+    pz_mesh_free(&garment->mesh);
+    free(garment->raw_to_garment);
+    memset(garment, 0, sizeof *garment);
+}
+
+/* Raw id -> id after dropping unreferenced vertices (the compaction pz_mesh_prepare does first). */
+static pz_status map_raw_ids(const pz_mesh *mesh, pl_garment *garment, int32_t *kept, pz_ctx *ctx)
+{
+    garment->raw_vertex_count = mesh->vertex_count;
+    garment->raw_face_count = mesh->face_count;
+    garment->raw_to_garment = malloc(((size_t)mesh->vertex_count + 1) * sizeof(int32_t));
+    if (!garment->raw_to_garment)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", "flatten");
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        garment->raw_to_garment[v] = -1;
+    for (int32_t c = 0; c < 3 * mesh->face_count; ++c)
+        if (mesh->faces[c] >= 0 && mesh->faces[c] < mesh->vertex_count)
+            garment->raw_to_garment[mesh->faces[c]] = 0;
+    *kept = 0;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        if (garment->raw_to_garment[v] == 0)
+            garment->raw_to_garment[v] = (*kept)++;
+    return PZ_OK;
+}
+
+/*
+ * The automatic preparation (pz_run): its steps are summarized in notes
+ * here, not noted one by one. The prepared mesh replaces the garment only
+ * when it changed something; result->prepared keeps the report.
+ */
+static pz_status prepare_automatically(const pz_run_options *options, pz_result *result, pz_mesh **mesh,
+                                       int *changed, pz_ctx *ctx)
+{
+    *changed = 0;
+    double start = pz_seconds();
+    pz_prepare_options prepare_options = options->prepare_options;
+    prepare_options.name = options->name;
+    int quiet = ctx->quiet;
+    ctx->quiet = 1;
+    pz_status status = pz_prepare_auto(*mesh, &prepare_options, &result->prepared, ctx);
+    ctx->quiet = quiet;
+    result->timings.prepare = pl_elapsed_ms(start, pz_seconds());
+    if (status != PZ_OK)
+        return status;
+    const pz_prepare_report *report = &result->prepared->report;
+    int any_change = report->output_faces != report->input_faces || report->output_vertices != report->input_vertices;
+    for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i) {
+        const pz_prepare_step *step = &report->steps[i];
+        /* A remesh that was tried and undone says why; one that was not needed stays quiet. */
+        int tried = i == PZ_PREPARE_REMESH && strstr(step->detail, "undone") != NULL;
+        if ((step->ran || tried) && i != PZ_PREPARE_HAUSDORFF)
+            pz_note(ctx, "run: prepare: %s%s: %s", step->name, step->ran ? "" : " (not kept)", step->detail);
+    }
+    if (any_change) {
+        pz_mesh_free(mesh);
+        *mesh = result->prepared->mesh;
+        result->prepared->mesh = NULL;
+        *changed = 1;
+    }
+    return PZ_OK;
+}
+
+/*
+ * pz_mesh_prepare notes each repair as it makes it, but a run that then
+ * fails must print its one error line only. So a copy is prepared quietly
+ * first; only when that succeeds is the preparation repeated aloud (it is
+ * deterministic), or, in a quiet context, the prepared copy simply kept.
+ */
+static pz_status repair_and_validate(pz_mesh **mesh, const char *name, unsigned repair_flags, pz_ctx *ctx)
+{
+    pz_mesh *trial = NULL;
+    pz_status status = pz_mesh_copy(*mesh, &trial, ctx);
+    if (status != PZ_OK)
+        return status;
+    int quiet = ctx->quiet;
+    ctx->quiet = 1;
+    status = pz_mesh_prepare(trial, name, repair_flags, ctx);
+    ctx->quiet = quiet;
+    if (status == PZ_OK && quiet) {
+        pz_mesh_free(mesh);
+        *mesh = trial;
+        return PZ_OK;
+    }
+    pz_mesh_free(&trial);
+    if (status != PZ_OK)
+        return status;
+    return pz_mesh_prepare(*mesh, name, repair_flags, ctx);
+}
+
+/* garment.obj's vertex positions in the input's units (see the file comment). */
+static pz_status output_positions(const pz_mesh *input, const pl_garment *garment, pz_result *result, pz_ctx *ctx)
+{
+    const pz_mesh *mesh = garment->mesh;
+    result->positions_out = malloc(((size_t)mesh->vertex_count + 1) * 3 * sizeof(double));
+    if (!result->positions_out)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
+    if (garment->ids_preserved) {
+        for (int32_t v = 0; v < garment->raw_vertex_count; ++v)
+            if (garment->raw_to_garment[v] >= 0)
+                memcpy(result->positions_out + 3 * (size_t)garment->raw_to_garment[v],
+                       input->positions + 3 * (size_t)v, 3 * sizeof(double));
+        return PZ_OK;
+    }
+    for (size_t i = 0; i < 3 * (size_t)mesh->vertex_count; ++i)
+        result->positions_out[i] = mesh->positions[i] / mesh->unit_scale;
+    return PZ_OK;
+}
+
+/* The warp direction: the options' grain, or the garment's vertical axis. */
+static void choose_grain(const pz_run_options *options, const pz_mesh *mesh, pz_result *result)
+{
+    if (options->flatten.grain_given) {
+        memcpy(result->grain, options->flatten.grain, sizeof result->grain);
+        result->grain_source = "given";
+        return;
+    }
+    /* y-up (glTF, CLO3D, Blender) and z-up (scanners, CAD) garments both get the warp along their height. */
+    pz_mesh_vertical_axis(mesh, result->grain);
+    result->grain_source = result->grain[1] > 0.5 ? "vertical axis (y)" : "vertical axis (z)";
+}
+
+pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepare, pz_result *result,
+                  pl_garment *garment, pz_ctx *ctx)
+{
+    memset(garment, 0, sizeof *garment);
+    if (!input || input->vertex_count < 0 || input->face_count < 0)
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: no mesh", pl_who(result));
+    int32_t kept = 0;
+    pz_status status = pz_mesh_copy(input, &garment->mesh, ctx);
+    if (status == PZ_OK)
+        status = map_raw_ids(input, garment, &kept, ctx);
+    if (status != PZ_OK)
+        return status;
+    pz_mesh_to_mm(garment->mesh, options->units, &result->units);
+    result->units_guessed = options->units == PZ_UNITS_AUTO;
+    int prepared = 0;
+    if (prepare && (status = prepare_automatically(options, result, &garment->mesh, &prepared, ctx)) != PZ_OK)
+        return status;
+    const char *name = options->name ? options->name : "garment";
+    status = repair_and_validate(&garment->mesh, name, options->repair_flags, ctx);
+    if (status != PZ_OK)
+        return status;
+    const pz_mesh *mesh = garment->mesh;
+    garment->ids_preserved = !prepared && mesh->face_count == garment->raw_face_count && mesh->vertex_count == kept;
+    status = output_positions(input, garment, result, ctx);
+    if (status != PZ_OK)
+        return status;
+    choose_grain(options, mesh, result);
+    return PZ_OK;
+}

@@ -1,0 +1,368 @@
+/*
+ * pipeline/pipeline.c -- pz_run and pz_flatten: the stages in order.
+ *
+ *   load (load.c) -> panels: the segmentation (segmentation.c: field,
+ *   layout, truing) or the user's panels (panels.c) -> pattern
+ *   (pz_pattern_build) -> flatten (flatten.c) -> [verdict round: the
+ *   segmentation may veto panels and lay out again] -> layout of the pieces
+ *   -> metrics on every pose -> the final verdict (verdict.c) -> mirror
+ *   pairs, layout curves -> pieces and marker (export/).
+ *
+ * Data flows one way: each stage takes the previous stage's result; the
+ * result owns everything it holds. Nothing is written here (write.c).
+ *
+ * Progress: prepare 0-10 %, field 10-20 %, segment 20-70 %, flatten 70-90 %,
+ * pieces and marker 90-100 % (pz_progress through the context).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "pipeline/internal.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+double pl_elapsed_ms(double start, double end)
+{
+    return pl_round((end - start) * 1000.0, 3);
+}
+
+double pl_round(double value, int decimals)
+{
+    double scale = pow(10.0, decimals);
+    if (!isfinite(value) || fabs(value) * scale > 1e15)
+        return value; /* nothing to shorten, and value * scale could overflow */
+    return round(value * scale) / scale;
+}
+
+const char *pl_who(const pz_result *result)
+{
+    return result && result->from_run ? "run" : "flatten";
+}
+
+/* ---------------------------------------------------------------- options */
+
+void pz_flatten_options_default(pz_flatten_options *options)
+{
+    memset(options, 0, sizeof *options);
+    options->backend = PZ_BACKEND_TEXTILE;
+    options->iterations = 20;
+    options->weights[0] = 5, options->weights[1] = 1, options->weights[2] = 5, options->weights[3] = 5;
+    options->fabric = pz_fabric_default();
+}
+
+void pz_run_options_default(pz_run_options *options)
+{
+    memset(options, 0, sizeof *options);
+    options->units = PZ_UNITS_AUTO;
+    options->prepare = 1;
+    pz_goal_options_default(&options->goals);
+    pz_segment_options_default(&options->segment);
+    options->truing = 1;
+    pz_flatten_options_default(&options->flatten);
+    pz_export_options_default(&options->output);
+}
+
+/* ---------------------------------------------------------------- the result */
+
+void pz_result_free(pz_result **result)
+{
+    pz_result *r = result ? *result : NULL;
+    if (!r)
+        return;
+    pz_mesh_free(&r->garment);
+    free(r->positions_out);
+    if (r->panel_names && r->pattern)
+        for (int32_t p = 0; p < r->pattern->panel_count; ++p)
+            free(r->panel_names[p]);
+    free(r->panel_names);
+    pz_pattern_free(&r->pattern);
+    free(r->uv);
+    free(r->panel_mirror);
+    pl_backend_outcome_clear(&r->backend);
+    for (int i = 0; r->metrics && i < r->metrics_count; ++i)
+        pz_metrics_free(&r->metrics[i]);
+    free(r->metrics);
+    free(r->verdict.panels);
+    free(r->layout_offsets);
+    free(r->layout_vertices);
+    free(r->layout_is_dart);
+    pz_segment_result_free(&r->segment);
+    pz_prepare_result_free(&r->prepared);
+    free(r->garment_name);
+    free(r->seam_allowances);
+    pz_pieces_free(&r->pieces);
+    pz_marker_free(&r->marker);
+    free(r);
+    *result = NULL;
+}
+
+/* ---------------------------------------------------------------- stages after the flattening */
+
+/*
+ * The layout as polylines of garment vertices, from the pattern itself so
+ * that given panels and the segmentation look the same: one polyline per
+ * seam (its side a) and one per dart (tip, then leg a).
+ */
+static pz_status build_layout_curves(pz_result *result, pz_ctx *ctx)
+{
+    const pz_pattern *pattern = result->pattern;
+    int64_t total = 0;
+    int32_t count = pattern->seam_count + pattern->dart_count;
+    for (int32_t s = 0; s < pattern->seam_count; ++s)
+        total += pattern->seams[s].pair_count;
+    for (int32_t d = 0; d < pattern->dart_count; ++d)
+        total += pattern->darts[d].pair_count + 1;
+    result->layout_offsets = malloc(((size_t)count + 1) * sizeof(int32_t));
+    result->layout_vertices = malloc(((size_t)total + 1) * sizeof(int32_t));
+    result->layout_is_dart = calloc((size_t)count + 1, 1);
+    if (!result->layout_offsets || !result->layout_vertices || !result->layout_is_dart)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
+    int32_t at = 0, curve = 0;
+    for (int32_t s = 0; s < pattern->seam_count; ++s, ++curve) {
+        result->layout_offsets[curve] = at;
+        for (int32_t i = 0; i < pattern->seams[s].pair_count; ++i)
+            result->layout_vertices[at++] = pattern->vertex_origin[pattern->seams[s].side_a[i]];
+    }
+    for (int32_t d = 0; d < pattern->dart_count; ++d, ++curve) {
+        const pz_dart *dart = &pattern->darts[d];
+        result->layout_offsets[curve] = at;
+        result->layout_is_dart[curve] = 1;
+        result->layout_vertices[at++] = pattern->vertex_origin[dart->tip];
+        for (int32_t i = 0; i < dart->pair_count; ++i)
+            result->layout_vertices[at++] = pattern->vertex_origin[dart->leg_a[i]];
+    }
+    result->layout_offsets[count] = at;
+    result->layout_curve_count = count;
+    return PZ_OK;
+}
+
+/* The mirror partner of each panel, from the segmentation's symmetry (NULL: no pairs). */
+static pz_status find_mirror_panels(pz_result *result, pz_ctx *ctx)
+{
+    const pz_segment_result *segment = result->segment;
+    if (!segment || segment->panel_count != result->pattern->panel_count || !segment->symmetry.found)
+        return PZ_OK;
+    result->panel_mirror = malloc(((size_t)segment->panel_count + 1) * sizeof(int32_t));
+    if (!result->panel_mirror)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
+    for (int32_t p = 0; p < segment->panel_count; ++p)
+        result->panel_mirror[p] = segment->panels[p].mirror_panel;
+    return PZ_OK;
+}
+
+/* The pieces (and the marker) every export file is drawn from. */
+static pz_status build_pieces(pz_result *result, pz_ctx *ctx)
+{
+    if (pz_export_file_count == 0)
+        return PZ_OK;
+    pz_export_options *options = &result->options.output;
+    pz_status status = PZ_OK;
+    if (result->options.allowances_path) {
+        status = pz_export_read_allowances(result->options.allowances_path, result->pattern,
+                                           &result->seam_allowances, ctx);
+        options->seam_allowances_mm = result->seam_allowances;
+    }
+    if (status == PZ_OK)
+        status = pz_pieces_build(result->pattern, result->uv, options, result->panel_mirror,
+                                 (const char *const *)result->panel_names, &result->pieces, ctx);
+    if (status == PZ_OK)
+        status = pz_marker_build(result->pieces, options, &result->marker, ctx);
+    for (int32_t i = 0; status == PZ_OK && i < result->marker->unplaced_count; ++i) {
+        const pz_piece *piece = &result->pieces->pieces[result->marker->unplaced[i]];
+        pz_note(ctx, "warning: marker: piece %s (%.0f mm wide) does not fit on a fabric %.0f mm wide: left out of "
+                "marker.svg (give a wider --fabric-width)", piece->name, piece->bbox_max[0] - piece->bbox_min[0],
+                result->marker->fabric_width_mm);
+    }
+    return status;
+}
+
+/* ---------------------------------------------------------------- the pipeline */
+
+/* Everything one call holds besides the result. */
+typedef struct pipeline_run {
+    const pz_panels *panels;         /* the user's panels, or NULL with a segmenter */
+    pl_garment garment;
+    pl_segmenter *segmenter;         /* pz_run without panels */
+    pl_panel_choice choice;
+    pz_correspondences correspondences;
+} pipeline_run;
+
+static void pipeline_run_clear(pipeline_run *run)
+{
+    pl_garment_clear(&run->garment);
+    pl_segmenter_free(&run->segmenter);
+    pl_panel_choice_clear(&run->choice);
+    pz_correspondences_clear(&run->correspondences);
+}
+
+/* The panels for this round: the segmentation's (its vertices may move: seam truing, and garment.obj's
+ * positions of the moved vertices follow, the others keep the input's exact numbers), or the user's. */
+static pz_status choose_panels(pipeline_run *run, pz_result *result, int round, pz_ctx *ctx)
+{
+    pz_mesh *mesh = run->garment.mesh;
+    if (!run->segmenter) {
+        pz_status status = pl_user_panels(run->panels, &run->garment, result, &run->choice, ctx);
+        if (status == PZ_OK && round == 0)
+            status = pl_user_correspondences(run->panels, &run->garment, run->choice.panel_count,
+                                             &run->correspondences, ctx);
+        return status;
+    }
+    size_t size = (size_t)mesh->vertex_count * 3;
+    double *before = malloc(size * sizeof(double) + 1);
+    if (!before)
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    memcpy(before, mesh->positions, size * sizeof(double));
+    pz_status status = pl_segmenter_choose(run->segmenter, mesh, &run->choice, ctx);
+    for (size_t v = 0; status == PZ_OK && v < size / 3; ++v)
+        if (memcmp(before + 3 * v, mesh->positions + 3 * v, 3 * sizeof(double)) != 0)
+            for (int d = 0; d < 3; ++d)
+                result->positions_out[3 * v + d] = mesh->positions[3 * v + d] / mesh->unit_scale;
+    free(before);
+    return status;
+}
+
+/* Panels, pattern and flattening, again while the segmentation's verdict rounds reject the flattening. */
+static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ctx)
+{
+    const pz_run_options *options = &result->options;
+    const char *name = options->name ? options->name : "garment";
+    double strain_limit = result->from_run ? options->goals.max_strain : 0;
+    pz_status status = PZ_OK;
+    double mark, now;
+    for (int round = 0; status == PZ_OK; ++round) {
+        if (round > 0) {
+            pl_backend_outcome_clear(&result->backend);
+            free(result->uv);
+            result->uv = NULL;
+            pz_pattern_free(&result->pattern);
+            pl_panel_choice_clear(&run->choice);
+        }
+        mark = pz_seconds();
+        status = choose_panels(run, result, round, ctx);
+        result->timings.panels += pl_elapsed_ms(mark, pz_seconds());
+        if (status == PZ_OK)
+            status = pz_pattern_build(run->garment.mesh, run->choice.face_panel, run->choice.extra_cuts,
+                                      &run->correspondences, name, &result->pattern, ctx);
+        result->timings.pattern += pl_elapsed_ms(mark, now = pz_seconds()), mark = now;
+        if (status == PZ_OK && !(result->uv = calloc(2 * (size_t)result->pattern->mesh->vertex_count + 2,
+                                                     sizeof(double))))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
+        if (status == PZ_OK) {
+            pz_progress(ctx, "flatten", 0.7, "%d panels", (int)result->pattern->panel_count);
+            status = pl_flatten_pattern(options, result->pattern, run->garment.mesh->unit_scale, result->grain,
+                                        strain_limit, result->uv, &result->backend, ctx);
+        }
+        int accepted = 1;
+        if (status == PZ_OK && run->segmenter)
+            accepted = pl_segmenter_accept(run->segmenter, result->pattern, result->uv, ctx);
+        result->timings.flatten += pl_elapsed_ms(mark, now = pz_seconds()), mark = now;
+        if (status == PZ_OK && !accepted)
+            status = pz_check_cancel(ctx, pl_who(result));
+        if (status != PZ_OK || accepted)
+            break;
+    }
+    result->panels_source = run->choice.source;
+    return status;
+}
+
+/* Layout of the pieces, metrics on every pose, names. */
+static pz_status measure(pipeline_run *run, pz_result *result, pz_ctx *ctx)
+{
+    double mark = pz_seconds(), now;
+    pl_warn_wirewarp(&result->options, &result->backend, ctx);  /* once, for the pattern kept */
+    pz_status status = pl_pattern_layout(result->pattern, result->uv, PL_LAYOUT_GAP_MM, &result->layout_moved, ctx);
+    result->timings.flatten += pl_elapsed_ms(mark, now = pz_seconds()), mark = now;
+    if (status == PZ_OK) {
+        result->metrics_count = 1 + result->pattern->mesh->pose_count;
+        if (!(result->metrics = calloc((size_t)result->metrics_count, sizeof *result->metrics)))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
+    }
+    if (status == PZ_OK)
+        status = pl_measure(result->pattern, result->uv, &result->options.flatten.fabric, result->metrics,
+                            result->metrics_count, ctx);
+    result->timings.metrics = pl_elapsed_ms(mark, pz_seconds());
+    /* Names belong to the panels as chosen; should the pattern number them otherwise, show none. */
+    if (status == PZ_OK && result->pattern->panel_count == run->choice.panel_count) {
+        result->panel_names = run->choice.names;
+        run->choice.names = NULL;
+    }
+    return status;
+}
+
+static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_run_options *options, int from_run,
+                         pz_result **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    double start = pz_seconds();
+    pz_result *result = calloc(1, sizeof *result);
+    if (!result)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", from_run ? "run" : "flatten");
+    result->from_run = from_run;
+    if (options)
+        result->options = *options;
+    else
+        pz_run_options_default(&result->options);
+    pipeline_run run;
+    memset(&run, 0, sizeof run);
+    run.panels = panels;
+    int segment = from_run && !panels;
+    pz_progress(ctx, segment ? "prepare" : "load", 0, "%s", options && options->name ? options->name : "");
+    pz_status status = pl_load(mesh, &result->options, segment && result->options.prepare, result, &run.garment, ctx);
+    if (status == PZ_OK && segment)
+        status = pl_segmenter_create(&result->options, result->prepared, result->grain, &run.segmenter, ctx);
+    if (status == PZ_OK)
+        status = flatten_rounds(&run, result, ctx);
+    if (status == PZ_OK)
+        status = measure(&run, result, ctx);
+    if (run.segmenter)
+        pl_segmenter_report(run.segmenter, result);
+    if (status == PZ_OK) {
+        /* The garment as flattened belongs to the result from here. */
+        result->garment = run.garment.mesh;
+        run.garment.mesh = NULL;
+    }
+    if (status == PZ_OK && from_run)
+        status = pl_final_verdict(result, !result->segment || result->segment->goals_met, ctx);
+    if (status == PZ_OK)
+        status = find_mirror_panels(result, ctx);
+    if (status == PZ_OK)
+        status = build_layout_curves(result, ctx);
+    if (status == PZ_OK)
+        pl_measure_pattern_symmetry(result, ctx);
+    double mark = pz_seconds();
+    /* The pieces carry the garment's name: the input's base name, unless the options name one. */
+    if (status == PZ_OK && !result->options.output.garment_name && result->options.name) {
+        result->garment_name = pl_base_name(result->options.name);
+        result->options.output.garment_name = result->garment_name;
+    }
+    if (status == PZ_OK) {
+        pz_progress(ctx, "export", 0.9, "pieces and marker");
+        status = build_pieces(result, ctx);
+    }
+    result->timings.pieces = pl_elapsed_ms(mark, pz_seconds());
+    result->timings.total = pl_elapsed_ms(start, pz_seconds());
+    pipeline_run_clear(&run);
+    result->options.panels = NULL;  /* the caller's, and not needed beyond this call */
+    if (status == PZ_OK)
+        status = pz_check_cancel(ctx, pl_who(result));
+    if (status != PZ_OK) {
+        pz_result_free(&result);
+        return status;
+    }
+    pz_progress(ctx, "done", 1, "%d panels", (int)result->pattern->panel_count);
+    *out = result;
+    return PZ_OK;
+}
+
+pz_status pz_run(const pz_mesh *garment, const pz_run_options *options, pz_result **out, pz_ctx *ctx)
+{
+    return execute(garment, options ? options->panels : NULL, options, 1, out, ctx);
+}
+
+pz_status pz_flatten(const pz_mesh *garment, const pz_panels *panels, const pz_run_options *options,
+                     pz_result **out, pz_ctx *ctx)
+{
+    return execute(garment, panels, options, 0, out, ctx);
+}
