@@ -77,7 +77,7 @@ pz_status pz_check_cancel(pz_ctx *ctx, const char *what)
 
 void pz_progress(pz_ctx *ctx, const char *stage, double fraction, const char *fmt, ...)
 {
-    if (!ctx || ctx->quiet || !ctx->progress)
+    if (!ctx || !ctx->progress)
         return;
     char message[256];
     va_list args;

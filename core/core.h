@@ -101,7 +101,7 @@ int pz_cancelled(const pz_ctx *ctx);
  */
 pz_status pz_check_cancel(pz_ctx *ctx, const char *what);
 
-/** Reports progress through ctx->progress (nothing when it is NULL or ctx is quiet). */
+/** Reports progress through ctx->progress (nothing when it is NULL; ctx->quiet silences notes, not this). */
 void pz_progress(pz_ctx *ctx, const char *stage, double fraction, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))
