@@ -301,5 +301,35 @@ printf 'v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n' >nan.obj
 expect_error 65 "nan.obj" --absent bad7 -- run nan.obj -o bad7 --prepare off
 printf '{"curves": [[[0,0,0]]]}' >short-sketch.json
 expect_error 65 "short-sketch.json" --absent bad8 -- run bodice.obj -o bad8 --sketch short-sketch.json
+expect_error 64 "--outputs" --absent bad9 -- run bodice.obj -o bad9 --outputs svg,pdfx
+expect_error 64 "--max-seam-mismatch" --absent bad10 -- run bodice.obj -o bad10 --max-seam-mismatch -0.1
+
+# --outputs: exactly the files asked for.
+run run bodice.obj -o some --outputs dxf,layout,json --quiet
+expect_ok "run --outputs dxf,layout,json"
+check "run --outputs dxf,layout,json wrote $(ls some | tr '\n' ' ')" \
+    [ "$(ls some | tr '\n' ' ')" = "layout.obj pattern.dxf report.json " ]
+
+# The seam-length goal is judged: no flattening keeps every seam within 1e-9.
+run run bodice.obj -o exact-seams --max-seam-mismatch 1e-9 --quiet
+expect_ok "run --max-seam-mismatch 1e-9"
+report_checks "run --max-seam-mismatch 1e-9" exact-seams \
+    "goals met with seams 1e-9 apart" "d['summary']['goals_met'] is False" \
+    "the reasons do not name the seams" "'seam mismatch' in d['summary']['goals_reasons']" \
+    "the goal is not in the report" "d['segmentation']['max_seam_mismatch'] == 1e-9"
+
+# Ctrl-C (SIGINT) stops a run: exit 130, one line, nothing written. The 20K-face bodice takes seconds.
+"$BIN" generate bodice -o big.obj --faces 20000 --quiet
+"$BIN" run big.obj -o interrupted --prepare off >"$WORK/out" 2>"$WORK/err" &
+pid=$!
+sleep 1.5
+kill -INT $pid
+wait $pid
+rc=$?
+check "run interrupted: exit $rc, expected 130 ($(tail -c 300 "$WORK/err"))" [ "$rc" -eq 130 ]
+check "run interrupted: the last line is not 'cancelled': $(tail -n 1 "$WORK/err")" \
+    grep -q 'cancelled' <(tail -n 1 "$WORK/err")
+check "run interrupted: wrote files" [ ! -e interrupted ]
+check "run interrupted: left a temporary file" no_temporaries
 
 finish
