@@ -1,0 +1,344 @@
+/*
+ * pipeline/pipeline.h -- the whole of panelize as one library call.
+ *
+ *   pz_run:     garment in, sewable pattern out (load -> prepare -> field ->
+ *               segment -> param -> export), every panel judged by one goal
+ *               judge (segment/segment.h, pz_goal_judge).
+ *   pz_flatten: the user's own panels flattened (no segmentation).
+ *   pz_result_write: the files of a result, into a folder, all or nothing.
+ *
+ * Nothing here touches the file system but pz_result_write (and the
+ * option files the options name: sketches, allowances, feature curves). The
+ * command line (cli/), the Python package and the batch runner are callers
+ * of these functions; docs/architecture.md shows how the stages connect.
+ *
+ *   pz_run_options options;
+ *   pz_run_options_default(&options);
+ *   options.goals.max_strain = 0.03;
+ *   pz_result *result = NULL;
+ *   if (pz_run(mesh, &options, &result, &ctx) == PZ_OK) {
+ *       printf("%d panels, goals %s\n", result->pattern->panel_count,
+ *              result->verdict.goals_met ? "met" : "not met");
+ *       pz_result_write(result, "out", PZ_OUTPUT_ALL, &ctx);
+ *   }
+ *   pz_result_free(&result);
+ *
+ * Ownership: the mesh passed in stays the caller's and is not changed (the
+ * pipeline works on its own copy); a result is the caller's and is freed
+ * with pz_result_free; every pointer inside a result belongs to the result.
+ * Progress and cancellation go through the context (core/core.h).
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_PIPELINE_H
+#define PZ_PIPELINE_H
+
+#include "core/core.h"
+#include "export/export.h"
+#include "field/field.h"
+#include "mesh/mesh.h"
+#include "param/param.h"
+#include "segment/segment.h"
+
+#include <cjson/cJSON.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ------------------------------------------------------------------------ */
+/* Options                                                                   */
+/* ------------------------------------------------------------------------ */
+
+/** The back-end that flattens the panels (param/param.h). */
+typedef enum pz_backend {
+    PZ_BACKEND_TEXTILE = 0,    /* anisotropic textile energy, pietroni2022 Sec. 4.3 (default) */
+    PZ_BACKEND_LSCM,           /* least-squares conformal maps (Levy 2002) */
+    PZ_BACKEND_WIREWARP,       /* WireWarping, wang2008: every seam keeps its 3D length */
+    PZ_BACKEND_SPRINGMASS,     /* spring-mass with heap relaxation, wang2002 + IISERM */
+    PZ_BACKEND_COUNT
+} pz_backend;
+
+/** "textile", "lscm", "wirewarp", "springmass". */
+const char *pz_backend_name(pz_backend backend);
+/** The back-end of a name; PZ_BACKEND_COUNT when there is none. */
+pz_backend pz_backend_parse(const char *name);
+
+/** How the panels are flattened (the param stage as the pipeline drives it). */
+typedef struct pz_flatten_options {
+    pz_backend backend;          /* default PZ_BACKEND_TEXTILE */
+    int iterations;              /* textile iterations, 1..10000; default 20 */
+    double weights[4];           /* textile weights: stretch, rigidity, dart, seam; default 5, 1, 5, 5 */
+    pz_fabric fabric;            /* pz_fabric_default: the metrics' fabric and textile's constants */
+    int fabric_given;            /* 1: springmass uses the orthotropic (warp, weft, shear) energy */
+    int grain_given;             /* 0 (default): the garment's vertical axis (pz_mesh_vertical_axis) */
+    double grain[3];             /* the warp direction in 3D when grain_given */
+    int progressive;             /* wirewarp: 1 = the progressive scheme, 0 = global (default) */
+    int relax_full;              /* springmass: 1 = relax every node, 0 = heap (default) */
+    const char *features_path;   /* wirewarp: feature curves file (docs/wirewarp.md), or NULL */
+} pz_flatten_options;
+
+void pz_flatten_options_default(pz_flatten_options *options);
+
+/* ------------------------------------------------------------------------ */
+/* The user's own panels (pz_flatten, and pz_run with panels given)          */
+/* ------------------------------------------------------------------------ */
+
+typedef enum pz_panels_source {
+    PZ_PANELS_GROUPS = 0,      /* one panel per connected piece of each label (OBJ group); the default */
+    PZ_PANELS_LABELS,          /* one panel per label exactly (panel files joined with pz_mesh_join) */
+    PZ_PANELS_UV,              /* the mesh's UV islands, cut along its UV seams */
+    PZ_PANELS_FACES            /* face_panel below */
+} pz_panels_source;
+
+/**
+ * Panels and their seams and darts, in the ids of the mesh given to
+ * pz_flatten / pz_run (before any repair). Borrowed by the call.
+ */
+typedef struct pz_panels {
+    pz_panels_source source;
+    const int32_t *face_panel;          /* PZ_PANELS_FACES: one id per face, 0 .. panel_count - 1, each used */
+    int32_t panel_count;
+    const char *face_panel_name;        /* where face_panel came from, for messages (may be NULL) */
+    const pz_seam *seams;               /* seams: vertex pairs of two panels (may be NULL) */
+    int32_t seam_count;
+    const pz_dart *darts;               /* darts: tip and facing leg vertices (may be NULL) */
+    int32_t dart_count;
+    const char *correspondence_name;    /* the first seam or dart file, for messages (may be NULL) */
+} pz_panels;
+
+/** Every option of the pipeline, one nested block per stage. */
+typedef struct pz_run_options {
+    /* load: the mesh as read, in its file's units */
+    pz_units units;                  /* the mesh's units; PZ_UNITS_AUTO (default) guesses */
+    unsigned repair_flags;           /* pz_repair_flags applied before validation; default none */
+    const char *name;                /* the garment's file or name, for messages and piece labels; may be NULL */
+    const pz_panels *panels;         /* pz_run: the user's panels instead of the segmentation (NULL: segment) */
+    /* prepare (pz_run only): weld, repair, remesh when the mesh needs it */
+    int prepare;                     /* 1 (default): pz_prepare_auto; 0: the mesh as given */
+    pz_prepare_options prepare_options;
+    /* field */
+    pz_field_options field;          /* sketch and poses are set by the run */
+    /* segment */
+    pz_goals goals;                  /* S, C, seam mismatch: pz_goals_default */
+    pz_segment_options segment;      /* symmetry, darts, candidates, threads (its goals come from `goals`) */
+    const char *sketch_path;         /* seams the user drew: {"curves": [[[x,y,z], ...]]} in the mesh's units */
+    const pz_sketch *sketch;         /* or the same in memory (millimetres); both may be given */
+    int truing;                      /* 1 (default): seams traced along mesh edges are smoothed on the surface */
+    /* param */
+    pz_flatten_options flatten;
+    /* export */
+    pz_export_options output;        /* allowances, notches, paper, marker, names */
+    const char *allowances_path;     /* per-seam allowances file (docs/export.md), or NULL */
+} pz_run_options;
+
+/** The defaults of every stage (each defined once, in its stage's own _default function). */
+void pz_run_options_default(pz_run_options *options);
+
+/* ------------------------------------------------------------------------ */
+/* The result                                                                */
+/* ------------------------------------------------------------------------ */
+
+/** The verdict on the final pattern, judged by pz_goal_judge on every panel. */
+typedef struct pz_verdict {
+    int judged;                      /* 1: goals were judged (pz_run); 0: pz_flatten (no goals) */
+    int goals_met;
+    int reachable;                   /* 0: the layout itself could not meet the goals (best effort) */
+    int32_t failing_panels;
+    int32_t over_strain_panels;      /* of them, over S */
+    double worst_strain;             /* worst |warp| or |weft| strain over every panel and pose */
+    double worst_seam_mismatch;      /* worst relative seam or dart length mismatch */
+    pz_goal_result *panels;          /* panel_count: each panel's figures and failure bits */
+    char reasons[1024];              /* when not met: a summary, then the failing panels */
+} pz_verdict;
+
+/** Timings of one call, milliseconds. */
+typedef struct pz_timings {
+    double read, prepare, field, segment, pattern, panels, flatten, metrics, pieces, write, total;
+} pz_timings;
+
+/** A feature curve left out of the flattening (not on the mesh, across panels, ...). */
+typedef struct pz_skipped_feature {
+    int32_t curve;                         /* its index in the features file */
+    char problem[256];
+} pz_skipped_feature;
+
+/** What the back-end reports of its own run (report.json's backend_result). */
+typedef struct pz_backend_outcome {
+    pz_textile_result textile;             /* textile only */
+    pz_wirewarp_result wirewarp;           /* wirewarp only; relaxed_key_curves are indices in the features file */
+    pz_springmass_result springmass;       /* springmass only */
+    int32_t feature_count;                 /* wirewarp: feature curves used */
+    int32_t skipped_count;                 /* wirewarp: feature curves left out */
+    pz_skipped_feature *skipped;
+    double ms;                             /* the back-end's own run */
+} pz_backend_outcome;
+
+/**
+ * Everything the pattern files are made from, in memory. Every pointer is
+ * owned by the result (pz_result_free). Lengths in millimetres.
+ */
+typedef struct pz_result {
+    int from_run;                    /* 1: pz_run (segmentation or given panels with goals); 0: pz_flatten */
+    pz_run_options options;          /* the options used (string pointers borrowed from the caller's) */
+    /* the garment */
+    pz_mesh *garment;                /* as flattened: prepared, repaired, seams trued (mm) */
+    double *positions_out;           /* garment->vertex_count x 3 in the input's units (garment.obj's v) */
+    pz_units units;                  /* the input's units */
+    int units_guessed;
+    double grain[3];                 /* the warp direction used */
+    const char *grain_source;        /* "given", "vertical axis (y)", "vertical axis (z)" (static) */
+    /* the panels and the pattern */
+    const char *panels_source;       /* "segmentation", "file", "uv", "files", "groups", "components" (static) */
+    pz_pattern *pattern;             /* the cut garment: panels, seams, darts (param/param.h) */
+    double *uv;                      /* pattern->mesh->vertex_count x 2: the pieces laid out side by side */
+    int layout_moved;                /* 1: the pieces were moved apart after flattening */
+    char **panel_names;              /* pattern->panel_count entries (may be NULL), or NULL */
+    int32_t *panel_mirror;           /* pattern->panel_count: the mirror-image panel (itself, -1 none), or NULL */
+    pz_backend_outcome backend;
+    /* metrics and verdict */
+    pz_metrics **metrics;            /* metrics_count: the rest pose, then every extra pose */
+    int metrics_count;
+    pz_verdict verdict;
+    /* the layout on the 3D garment: seams and darts as polylines of garment vertices */
+    int32_t layout_curve_count;
+    int32_t *layout_offsets;         /* layout_curve_count + 1 */
+    int32_t *layout_vertices;        /* curve i: layout_vertices[layout_offsets[i] .. layout_offsets[i+1]-1] */
+    uint8_t *layout_is_dart;         /* layout_curve_count: 1 for a dart (tip first, then leg a) */
+    /* pz_run only (NULL otherwise) */
+    pz_segment_result *segment;      /* the automatic layout: symmetry, panels, darts, counts */
+    pz_prepare_result *prepared;     /* the automatic preparation's report (its mesh moved to `garment`) */
+    pz_truing_result truing;
+    int32_t field_singularities;
+    int32_t verdict_rounds;          /* layouts made again because the joint flattening rejected panels */
+    int32_t vetoed_panels;
+    int32_t looser_settings;         /* looser goal settings laid out first (monotone panel counts) */
+    int32_t looser_most_panels;
+    int looser_seeded;
+    double pattern_mirror_rms_mm;    /* mirror symmetry of the flattened pieces; -1 when not measured */
+    double pattern_mirror_max_mm;
+    /* export */
+    double *seam_allowances;         /* pattern->seam_count, from allowances_path, or NULL */
+    pz_pieces *pieces;               /* sew and cut lines, notches, labels */
+    pz_marker *marker;               /* the pieces nested on the fabric */
+    pz_timings timings;
+} pz_result;
+
+/**
+ * The automatic pipeline: `garment` as read (in its file's units,
+ * options->units says which; extra poses attached), options from
+ * pz_run_options_default (NULL: the defaults). With options->panels set the
+ * user's panels replace the segmentation (and preparation), and the goals
+ * are still judged. On success *out is a new result; PZ_ERR_CANCELLED when
+ * ctx->cancel was set; other errors as the stages report them, *out NULL.
+ */
+pz_status pz_run(const pz_mesh *garment, const pz_run_options *options, pz_result **out, pz_ctx *ctx);
+
+/**
+ * Flattens the user's panels (`panels` NULL: PZ_PANELS_GROUPS; options->panels
+ * is not used): no preparation, no segmentation, no goal verdict
+ * (result->verdict.judged is 0). Ownership as pz_run; the goals are not used.
+ */
+pz_status pz_flatten(const pz_mesh *garment, const pz_panels *panels, const pz_run_options *options,
+                     pz_result **out, pz_ctx *ctx);
+
+/** Frees a result and everything in it; accepts NULL and *result == NULL; sets *result = NULL. */
+void pz_result_free(pz_result **result);
+
+/* ------------------------------------------------------------------------ */
+/* Files                                                                     */
+/* ------------------------------------------------------------------------ */
+
+/** The files pz_result_write can write (a bit set). */
+typedef enum pz_output_file {
+    PZ_OUTPUT_GARMENT_OBJ = 1u << 0,   /* garment.obj: the garment with the pattern as vt */
+    PZ_OUTPUT_SVG = 1u << 1,           /* pattern.svg */
+    PZ_OUTPUT_PDF = 1u << 2,           /* pattern.pdf (one 1:1 sheet) */
+    PZ_OUTPUT_TILED_PDF = 1u << 3,     /* pattern-tiled.pdf (A4/Letter pages) */
+    PZ_OUTPUT_DXF = 1u << 4,           /* pattern.dxf (AAMA/ASTM) */
+    PZ_OUTPUT_MARKER = 1u << 5,        /* marker.svg */
+    PZ_OUTPUT_GLB = 1u << 6,           /* garment.glb */
+    PZ_OUTPUT_REPORT_JSON = 1u << 7,   /* report.json */
+    PZ_OUTPUT_REPORT_HTML = 1u << 8,   /* report.html */
+    PZ_OUTPUT_LAYOUT_OBJ = 1u << 9,    /* layout.obj (pz_run only) */
+    PZ_OUTPUT_ENERGY_SVG = 1u << 10,   /* energy.svg (springmass only) */
+    PZ_OUTPUT_ALL = 0x7ffu             /* every file that applies to the result */
+} pz_output_file;
+
+/**
+ * Parses a comma-separated list of output names ("svg,dxf,json"; the names
+ * are obj, svg, pdf, tiled, dxf, marker, glb, json, html, layout, energy,
+ * all) into *outputs. PZ_ERR_USAGE naming the unknown word.
+ */
+pz_status pz_outputs_parse(const char *list, unsigned *outputs, pz_ctx *ctx);
+
+/**
+ * Writes the chosen files of a result into `folder` (created when missing),
+ * all or nothing: every file goes to a temporary first and is renamed when
+ * all are complete; on failure the files renamed and folders created are
+ * removed. Files that do not apply (layout.obj of pz_flatten, energy.svg of
+ * another back-end) are skipped. *report_text (may be NULL) receives
+ * report.json's text (malloc'd, the caller frees) when it was written.
+ */
+pz_status pz_result_write(pz_result *result, const char *folder, unsigned outputs, char **report_text,
+                          pz_ctx *ctx);
+
+/** report.json's content as a cJSON tree (the caller deletes it); NULL when out of memory. */
+cJSON *pz_result_report(const pz_result *result);
+
+/* ------------------------------------------------------------------------ */
+/* Input files besides the mesh (docs/flatten.md)                            */
+/* ------------------------------------------------------------------------ */
+
+/**
+ * A panels file: one integer panel id per line, one line per face (blank
+ * lines at the end are ignored). Ids must be 0..K-1 with every id used.
+ * Writes face_count ids to face_panel and K to *panel_count. PZ_ERR_OPEN when
+ * unreadable, PZ_ERR_DATA naming the file and line otherwise.
+ */
+pz_status pz_read_panel_file(const char *path, int32_t face_count, int32_t *face_panel, int32_t *panel_count,
+                             pz_ctx *ctx);
+
+/**
+ * How the vertex ids of seam and dart files map to the mesh's vertices: with
+ * one mesh file, ids are that file's; with several panel files joined,
+ * panel K's ids are local to its file, which starts at vertex
+ * file_vertex_offset[K] of the joined mesh.
+ */
+typedef struct pz_vertex_space {
+    int32_t file_count;
+    const int32_t *file_vertex_offset;  /* file_count + 1 */
+    const uint8_t *vertex_used;         /* file_vertex_offset[file_count]: 1 when a face uses the vertex
+                                           (may be NULL: not checked) */
+    int32_t panel_count;                /* panel ids in the files must be below this */
+} pz_vertex_space;
+
+/**
+ * A seam file: line 1 panel of side A, line 2 panel of side B, then `a b`
+ * vertex pairs (a on panel A, b on panel B). Fills `seam` with the joined
+ * mesh's vertex ids (side_a/side_b malloc'd, freed by
+ * pz_correspondences_clear or by the caller). PZ_ERR_DATA names the file and line.
+ */
+pz_status pz_read_seam_file(const char *path, const pz_vertex_space *space, pz_seam *seam, pz_ctx *ctx);
+
+/**
+ * A dart given as `FILE` or `K:FILE`: line 1 the tip vertex, then `p q`
+ * pairs facing each other on the two legs. The panel K comes from the `K:`
+ * prefix or from a file name `patch_K_dart_J...`; with several panel files
+ * it is required (PZ_ERR_USAGE when it cannot be told).
+ */
+pz_status pz_read_dart_file(const char *spec, const pz_vertex_space *space, pz_dart *dart, pz_ctx *ctx);
+
+/**
+ * Joins meshes one after another without welding: label K = part K (named
+ * after names[K]'s base name), so PZ_PANELS_LABELS makes part K panel K.
+ * vertex_offset (count + 1) receives where each part's vertices start.
+ */
+pz_status pz_mesh_join(pz_mesh *const *parts, const char *const *names, int32_t count, pz_mesh **out,
+                       int32_t *vertex_offset, pz_ctx *ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* PZ_PIPELINE_H */
