@@ -20,14 +20,12 @@
 #include <stdint.h>
 #include <stdio.h>
 
+/* PZ_VERSION_MAJOR, _MINOR, _PATCH and PZ_VERSION_STRING: generated from CMakeLists.txt's project(). */
+#include "core/version.h"
+
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-#define PZ_VERSION_MAJOR 0
-#define PZ_VERSION_MINOR 1
-#define PZ_VERSION_PATCH 0
-#define PZ_VERSION_STRING "0.1.0"
 
 /** The library's version at run time ("0.1.0"), to compare with PZ_VERSION_STRING at build time. */
 const char *pz_version(void);

@@ -6,7 +6,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 packages=(
-  build-essential cmake pkg-config python3
+  build-essential cmake python3   # build-essential brings binutils: readelf and nm (tests/install)
+  pkg-config              # finds cairo; tests/install builds programs with the installed panelize.pc
   libsuitesparse-dev      # CHOLMOD: every sparse solve
   libcgal-dev             # remeshing, exact predicates, polygon offsets
   libtinygltf-dev nlohmann-json3-dev libstb-dev   # glTF in and out (libtinygltf.so)
