@@ -14,6 +14,8 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "generate/generate.h"
+#include "io/io.h"
 #include "pipeline/cli.h"
 
 #include <stdlib.h>

@@ -18,6 +18,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "pipeline/cli.h"
 
 #include <math.h>

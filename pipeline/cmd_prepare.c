@@ -15,7 +15,9 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "pipeline/cli.h"
+#include "prepare/prepare.h"
 
 #include <errno.h>
 #include <math.h>

@@ -29,6 +29,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "pipeline/pattern_output.h"
+#include "prepare/prepare.h"
 #include "segment/segment.h"
 
 #include <errno.h>

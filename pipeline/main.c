@@ -15,6 +15,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "pipeline/cli.h"
 
 #include <errno.h>

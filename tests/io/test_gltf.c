@@ -1,5 +1,5 @@
 /*
- * tests/mesh/test_gltf.c -- glTF reading and GLB writing (mesh/gltf_shim.cpp).
+ * tests/io/test_gltf.c -- glTF reading and GLB writing (io/gltf_read.cpp, io/gltf_write.cpp).
  *
  *  - A grid with a UV seam, two labels, two poses and an unreferenced vertex
  *    survives GLB write -> read: counts, face indices (through _PZ_VERTEX_ID),
@@ -18,11 +18,12 @@
  *  - OBJ -> GLB -> OBJ through pz_mesh_read / pz_mesh_write keeps counts and
  *    indices exactly.
  * With PZ_GLB_OUT set, the GLBs are also left in that directory for
- * tests/mesh/test_gltf_validator.sh.
+ * tests/io/test_gltf_validator.sh.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "io/io.h"
 #include "mesh/mesh.h"
 #include "test_files.h"
 

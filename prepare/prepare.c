@@ -1,5 +1,5 @@
 /*
- * mesh/prepare.c -- scan-ready input (issue 8, docs/prepare.md): turns a scan
+ * prepare/prepare.c -- scan-ready input (issue 8, docs/prepare.md): turns a scan
  * or an export (millions of faces, slivers, non-manifold vertices, fragments,
  * unwelded panels) into the manifold, well-shaped mesh the paper assumes
  * ("otherwise we uniformly remesh with standard tools").
@@ -27,7 +27,7 @@
  *     produce: down to 2x, seams and outline locked, so remeshing works on
  *     a small mesh. Thinning (rounds of independent half-edge collapses,
  *     below) does the bulk in O(F) per round; CGAL edge collapse
- *     (mesh/cgal_shim.cpp) finishes only when thinning stalls.
+ *     (prepare/cgal_shim.cpp) finishes only when thinning stalls.
  *  5. remesh (CGAL isotropic_remeshing, Botsch & Kobbelt 2004) to the target
  *     edge L; by default L gives ~20K faces: the equilateral edge
  *     F = A / (sqrt(3)/4 L^2)  =>  L = sqrt(4 A / (sqrt(3) F)), lengthened
@@ -59,9 +59,9 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh.h"
+#include "prepare/prepare.h"
 
-#include "cgal_shim.h"
+#include "prepare/cgal_shim.h"
 #include "core/util.h"
 
 #include <math.h>
