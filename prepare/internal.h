@@ -104,8 +104,14 @@ typedef struct prep_halfedge_key {
  */
 prep_halfedge_key *prep_sorted_halfedges(const int32_t *faces, int32_t face_count);
 
-/* The end of the run of keys with the same edge as keys[begin]. (prepare/weld.c) */
-size_t prep_group_end(const prep_halfedge_key *keys, size_t count, size_t begin);
+/* The end of the run of keys with the same edge as keys[begin]. */
+static inline size_t prep_group_end(const prep_halfedge_key *keys, size_t count, size_t begin)
+{
+    size_t end = begin + 1;
+    while (end < count && keys[end].lo == keys[begin].lo && keys[end].hi == keys[begin].hi)
+        ++end;
+    return end;
+}
 
 /* ------------------------------------------------------------------------ */
 /* The steps                                                                 */

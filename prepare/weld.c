@@ -67,14 +67,6 @@ prep_halfedge_key *prep_sorted_halfedges(const int32_t *faces, int32_t face_coun
     return keys;
 }
 
-size_t prep_group_end(const prep_halfedge_key *keys, size_t count, size_t begin)
-{
-    size_t end = begin + 1;
-    while (end < count && keys[end].lo == keys[begin].lo && keys[end].hi == keys[begin].hi)
-        ++end;
-    return end;
-}
-
 /* ------------------------------------------------------------------------ */
 /* 1. Weld                                                                   */
 /* ------------------------------------------------------------------------ */
