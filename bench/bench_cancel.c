@@ -11,6 +11,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "generate/generate.h"
 #include "pipeline/pipeline.h"
 
 #include "bench_util.h"

@@ -27,6 +27,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "../tests/export/export_fixtures.h"
+#include "generate/generate.h"
 
 #include <float.h>
 #include <math.h>

@@ -20,6 +20,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "field/field.h"
+#include "generate/generate.h"
 
 #include <stdio.h>
 #include <stdlib.h>

@@ -26,6 +26,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "../tests/export/fixture_export_b.h"
 #include "../tests/export/export_fixtures.h"
+#include "io/io.h"
 
 #include "bench_util.h"
 

@@ -26,7 +26,9 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "generate/generate.h"
 #include "mesh/mesh.h"
+#include "prepare/prepare.h"
 
 #include <pthread.h>
 #include <stdint.h>

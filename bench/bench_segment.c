@@ -22,6 +22,8 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "field/field.h"
+#include "generate/generate.h"
+#include "io/io.h"
 #include "segment/segment.h"
 
 #include <dirent.h>

@@ -19,6 +19,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "generate/generate.h"
 #include "param/param.h"
 #include "bench_util.h"
 

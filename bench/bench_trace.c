@@ -20,6 +20,8 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
+#include "generate/generate.h"
+#include "io/io.h"
 #include "segment/segment.h"
 #include "trace/trace.h"
 

@@ -18,6 +18,7 @@
 #ifndef PZ_CLI_H
 #define PZ_CLI_H
 
+#include "io/io.h"
 #include "pipeline/pipeline.h"
 
 #include <cjson/cJSON.h>

@@ -15,6 +15,8 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "cli/cli.h"
+#include "generate/generate.h"
+#include "io/io.h"
 
 #include <stdlib.h>
 #include <string.h>

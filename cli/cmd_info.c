@@ -19,6 +19,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "cli/cli.h"
+#include "io/io.h"
 
 #include <math.h>
 #include <stdlib.h>

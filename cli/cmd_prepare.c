@@ -16,6 +16,8 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "cli/cli.h"
+#include "io/io.h"
+#include "prepare/prepare.h"
 
 #include <errno.h>
 #include <math.h>

@@ -16,6 +16,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "cli/cli.h"
+#include "io/io.h"
 
 #include <errno.h>
 #include <limits.h>

@@ -11,7 +11,7 @@
  *    colouring of the panel adjacency (panels by decreasing neighbour count,
  *    then by index; each takes the first palette colour none of its coloured
  *    neighbours has), deterministic; 12 palette colours, more generated
- *    (mesh/gltf_shim.h) if a panel ever needs them.
+ *    (export/glb_shim.cpp) if a panel ever needs them.
  *  - TEXCOORD_0: each vertex's uv goes through its piece's marker placement
  *    (copy 0) and is divided by the fabric width (u) and the marker length
  *    (v), so the texture space is the marker: a render of marker.svg's fabric
@@ -30,12 +30,12 @@
  *  - Seams: inputs->layout_* polylines (garment vertex ids) when given, else
  *    every pattern seam's side A and every dart's tip and leg A, as a LINES
  *    primitive over garment positions.
- * Errors: those of pz_glb_write_garment (mesh/gltf_shim.h), PZ_ERR_NOMEM.
+ * Errors: those of pz_glb_write_garment (export/glb_shim.h), PZ_ERR_NOMEM.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
-#include "mesh/gltf_shim.h"
+#include "export/glb_shim.h"
 #include "export/xml_text.h"
 
 #include <math.h>

@@ -1,7 +1,7 @@
 /*
  * mesh/geometry.c -- per-face and per-vertex quantities of the rest pose:
- * areas, normals, corner angles, cotangent weights, angle defect and the
- * developability error.
+ * areas, face and vertex normals, corner angles, cotangent weights, angle
+ * defect and the developability error.
  *
  * Robustness. Corner angles are atan2(|u x w|, u . w), accurate for angles
  * near 0 and pi where acos(u . w / (|u||w|)) loses half its digits (and can
@@ -21,39 +21,21 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh.h"
+#include "mesh/mesh.h"
+
+#include "core/vec.h"
 
 #include <math.h>
 #include <string.h>
-
-static const double PZ_PI = 3.14159265358979323846;
-
-static void subtract3(const double *a, const double *b, double *out)
-{
-    out[0] = a[0] - b[0];
-    out[1] = a[1] - b[1];
-    out[2] = a[2] - b[2];
-}
-
-static void cross3(const double *u, const double *w, double *out)
-{
-    out[0] = u[1] * w[2] - u[2] * w[1];
-    out[1] = u[2] * w[0] - u[0] * w[2];
-    out[2] = u[0] * w[1] - u[1] * w[0];
-}
-
-static double dot3(const double *u, const double *w) { return u[0] * w[0] + u[1] * w[1] + u[2] * w[2]; }
-
-static double norm3(const double *u) { return sqrt(dot3(u, u)); }
 
 /* Twice-area vector of face f: (p1 - p0) x (p2 - p0). */
 static void face_cross(const pz_mesh *mesh, int32_t f, double *out)
 {
     const int32_t *corner = mesh->faces + 3 * f;
     double u[3], w[3];
-    subtract3(mesh->positions + 3 * corner[1], mesh->positions + 3 * corner[0], u);
-    subtract3(mesh->positions + 3 * corner[2], mesh->positions + 3 * corner[0], w);
-    cross3(u, w, out);
+    pz_vec3_sub(mesh->positions + 3 * corner[1], mesh->positions + 3 * corner[0], u);
+    pz_vec3_sub(mesh->positions + 3 * corner[2], mesh->positions + 3 * corner[0], w);
+    pz_vec3_cross(u, w, out);
 }
 
 /* The edge vectors leaving corner k of face f, towards corners k+1 and k+2. */
@@ -61,25 +43,25 @@ static void corner_edges(const pz_mesh *mesh, int32_t f, int k, double *u, doubl
 {
     const int32_t *corner = mesh->faces + 3 * f;
     const double *origin = mesh->positions + 3 * corner[k];
-    subtract3(mesh->positions + 3 * corner[(k + 1) % 3], origin, u);
-    subtract3(mesh->positions + 3 * corner[(k + 2) % 3], origin, w);
+    pz_vec3_sub(mesh->positions + 3 * corner[(k + 1) % 3], origin, u);
+    pz_vec3_sub(mesh->positions + 3 * corner[(k + 2) % 3], origin, w);
 }
 
 static double corner_angle(const pz_mesh *mesh, int32_t f, int k)
 {
     double u[3], w[3], c[3];
     corner_edges(mesh, f, k, u, w);
-    cross3(u, w, c);
-    return atan2(norm3(c), dot3(u, w));
+    pz_vec3_cross(u, w, c);
+    return atan2(pz_vec3_norm(c), pz_vec3_dot(u, w));
 }
 
 static double corner_cotangent(const pz_mesh *mesh, int32_t f, int k)
 {
     double u[3], w[3], c[3];
     corner_edges(mesh, f, k, u, w);
-    cross3(u, w, c);
-    double sine_term = norm3(c);
-    return sine_term > 0.0 ? dot3(u, w) / sine_term : 0.0;
+    pz_vec3_cross(u, w, c);
+    double sine_term = pz_vec3_norm(c);
+    return sine_term > 0.0 ? pz_vec3_dot(u, w) / sine_term : 0.0;
 }
 
 void pz_geom_face_areas(const pz_mesh *mesh, double *areas)
@@ -87,7 +69,7 @@ void pz_geom_face_areas(const pz_mesh *mesh, double *areas)
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         double c[3];
         face_cross(mesh, f, c);
-        areas[f] = 0.5 * norm3(c);
+        areas[f] = 0.5 * pz_vec3_norm(c);
     }
 }
 
@@ -96,9 +78,30 @@ void pz_geom_face_normals(const pz_mesh *mesh, double *normals)
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         double c[3];
         face_cross(mesh, f, c);
-        double length = norm3(c);
+        double length = pz_vec3_norm(c);
         for (int k = 0; k < 3; ++k)
             normals[3 * f + k] = length > 0.0 ? c[k] / length : 0.0;
+    }
+}
+
+void pz_geom_vertex_normals(const pz_mesh *mesh, double *normals)
+{
+    memset(normals, 0, 3 * (size_t)mesh->vertex_count * sizeof *normals);
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double c[3];
+        face_cross(mesh, f, c);
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 3; ++d)
+                normals[3 * (size_t)mesh->faces[3 * f + k] + d] += c[d];
+    }
+    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+        double *n = normals + 3 * (size_t)v;
+        double length = pz_vec3_norm(n);
+        if (length > 0.0 && isfinite(length)) {
+            n[0] /= length, n[1] /= length, n[2] /= length;
+        } else {
+            n[0] = n[1] = 0.0, n[2] = 1.0;
+        }
     }
 }
 
@@ -108,7 +111,7 @@ double pz_geom_total_area(const pz_mesh *mesh)
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         double c[3];
         face_cross(mesh, f, c);
-        total += 0.5 * norm3(c);
+        total += 0.5 * pz_vec3_norm(c);
     }
     return total;
 }

@@ -1,10 +1,12 @@
 /*
  * mesh/mesh.h -- the public face of panelize's mesh core.
  *
- * Everything later stages stand on: the context and status codes, the triangle
- * mesh with its optional UVs, labels and poses, connectivity (half-edges in a
- * corner layout), validation, geometry, cutting, file formats, and the
- * synthetic garments used as the default input and as test fixtures.
+ * Everything later stages stand on: the triangle mesh with its optional UVs,
+ * labels and poses, its units, validation and repair, connectivity
+ * (half-edges in a corner layout), geometry, and cutting and extraction.
+ * Files are read and written by io/io.h, scans made ready by
+ * prepare/prepare.h, synthetic garments built by generate/generate.h; the
+ * context and status codes are core/core.h's.
  *
  * Conventions (see docs/mesh.md):
  *  - Shapes are written in libigl's notation: `nv x 3` means nv rows of 3,
@@ -287,6 +289,13 @@ void pz_geom_face_areas(const pz_mesh *mesh, double *areas);
 void pz_geom_face_normals(const pz_mesh *mesh, double *normals);
 /** Total area. */
 double pz_geom_total_area(const pz_mesh *mesh);
+/**
+ * Area-weighted vertex normals: vertex_count x 3, the sum of the (p1 - p0) x
+ * (p2 - p0) of the faces around each vertex, scaled to unit length; (0,0,1)
+ * where that sum vanishes (an isolated vertex, a degenerate fan). The GLB
+ * writers store them as NORMAL.
+ */
+void pz_geom_vertex_normals(const pz_mesh *mesh, double *normals);
 /** Corner angles in radians: face_count x 3, angle at corner k of face f. */
 void pz_geom_corner_angles(const pz_mesh *mesh, double *angles);
 /**
@@ -330,210 +339,6 @@ pz_status pz_mesh_cut(const pz_mesh *mesh, const pz_topology *topology, const ui
  */
 pz_status pz_mesh_extract(const pz_mesh *mesh, const int32_t *face_ids, int32_t count,
                           pz_mesh **out, int32_t **vertex_map, int32_t **face_map, pz_ctx *ctx);
-
-/* ------------------------------------------------------------------------ */
-/* File formats                                                              */
-/* ------------------------------------------------------------------------ */
-
-typedef enum pz_format {
-    PZ_FORMAT_UNKNOWN = 0,
-    PZ_FORMAT_OBJ,
-    PZ_FORMAT_PLY,
-    PZ_FORMAT_OFF,
-    PZ_FORMAT_GLB,   /* binary glTF */
-    PZ_FORMAT_GLTF   /* JSON glTF with external or data: URI buffers */
-} pz_format;
-
-/** The format from a path's extension (case-insensitive), PZ_FORMAT_UNKNOWN otherwise. */
-pz_format pz_format_from_path(const char *path);
-
-/**
- * Reads a mesh in any supported format (chosen by extension). Errors name the
- * path: PZ_ERR_OPEN (missing or unreadable), PZ_ERR_DATA (malformed, empty,
- * index out of range, truncated). Does not validate; coordinates are in the
- * file's units (unit_scale = 1).
- */
-pz_status pz_mesh_read(const char *path, pz_mesh **out, pz_ctx *ctx);
-
-/**
- * Parsers from memory, for tests and fuzzing. `name` is used in messages.
- * OBJ: v, vt, f (v, v/vt, v//vn, v/vt/vn, negative indices), polygons
- * fan-triangulated, `g`/`o` groups become labels, other lines ignored.
- * PLY: ascii, binary_little_endian, binary_big_endian; vertex x y z,
- * face vertex_indices / vertex_index lists, optional per-vertex s t / u v /
- * texture_u texture_v (shared per vertex), other properties skipped.
- * OFF: OFF / COFF / NOFF headers, polygons fan-triangulated.
- */
-pz_status pz_obj_read_memory(const char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);
-pz_status pz_ply_read_memory(const unsigned char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);
-pz_status pz_off_read_memory(const char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);
-/** glTF 2.0 from memory: binary GLB (`binary` = 1) or JSON (base_dir for external buffers; may be NULL). */
-pz_status pz_gltf_read_memory(const unsigned char *data, size_t size, int binary, const char *base_dir,
-                              const char *name, pz_mesh **out, pz_ctx *ctx);
-
-/**
- * Loads a rest mesh plus extra pose files with identical connectivity: the
- * rest file's own poses (glTF morph targets) come first, then each pose
- * file's rest positions. A pose whose vertex or face count or face list
- * differs is PZ_ERR_DATA naming both files.
- */
-pz_status pz_mesh_read_with_poses(const char *path, const char *const *pose_paths, int pose_path_count,
-                                  pz_mesh **out, pz_ctx *ctx);
-
-/** Options for writers. Zero = defaults. */
-typedef struct pz_write_options {
-    const uint32_t *label_colors;  /* label_count RGBA8 colours (0xRRGGBBAA) for GLB; NULL = a built-in palette */
-    const char *extras_json;       /* GLB: a JSON object text stored as the asset's extras (metadata), or NULL */
-    int write_poses;               /* GLB: write poses as morph targets (default 1 when 0 and poses exist: see docs) */
-} pz_write_options;
-
-/**
- * Writes a mesh, atomically (temporary file, then rename). Format by
- * extension: .obj (v, vt, f v/vt, one `g NAME` group per label run), .ply
- * (binary little endian; UVs as per-vertex s,t only when each vertex has one
- * UV), .glb. Errors: PZ_ERR_CREATE naming the path.
- */
-pz_status pz_mesh_write(const pz_mesh *mesh, const char *path, const pz_write_options *options, pz_ctx *ctx);
-
-/** Writers to an open stream (used by pz_mesh_write). */
-pz_status pz_obj_write_file(const pz_mesh *mesh, FILE *file, pz_ctx *ctx);
-pz_status pz_ply_write_file(const pz_mesh *mesh, FILE *file, pz_ctx *ctx);
-/** GLB writer: path is the final file; writes atomically itself. */
-pz_status pz_glb_write(const pz_mesh *mesh, const char *path, const pz_write_options *options, pz_ctx *ctx);
-
-/* ------------------------------------------------------------------------ */
-/* Preparation (scan-ready input): mesh/prepare.c, docs/prepare.md           */
-/* ------------------------------------------------------------------------ */
-
-/** What to do with the connected components left after repair. */
-typedef enum pz_prepare_keep {
-    PZ_PREPARE_KEEP_LARGEST = 0,  /* drop fragments under fragment_fraction of the area (default) */
-    PZ_PREPARE_KEEP_ALL           /* keep every component as a garment part */
-} pz_prepare_keep;
-
-/** Options of pz_prepare. Zero = defaults. Lengths in mm (the mesh is in mm). */
-typedef struct pz_prepare_options {
-    double weld_distance;      /* weld vertices closer than this; 0 = 0.01 mm; < 0 = no welding */
-    double target_edge;        /* remeshing edge length; 0 = from target_faces */
-    int32_t target_faces;      /* faces wanted when target_edge is 0; 0 = 20000 (automatic: the most
-                                  faces kept as they are, and the count above them; 0 = 10000) */
-    pz_prepare_keep keep;
-    double fragment_fraction;  /* 0 = 0.01 (1% of the total area) */
-    int iterations;            /* remeshing rounds; 0 = 5 */
-    int automatic;             /* 1: decimate and remesh only when the mesh needs it (pz_prepare_auto) */
-    int no_remesh;             /* 1: never decimate or remesh (weld and repair only) */
-    const char *name;          /* the input's name for messages; NULL = "mesh" */
-} pz_prepare_options;
-
-/** The steps, in the order they run (pz_prepare_report.steps). */
-typedef enum pz_prepare_step_id {
-    PZ_PREPARE_WELD = 0, PZ_PREPARE_REPAIR, PZ_PREPARE_FRAGMENTS, PZ_PREPARE_DECIMATE,
-    PZ_PREPARE_REMESH, PZ_PREPARE_POSES, PZ_PREPARE_HAUSDORFF, PZ_PREPARE_STEP_COUNT
-} pz_prepare_step_id;
-
-typedef struct pz_prepare_step {
-    const char *name;    /* "weld", "repair", "fragments", "decimate", "remesh", "poses", "hausdorff" */
-    int ran;             /* 1 when the step changed or measured something */
-    char detail[256];    /* one line: the counts, or why the step did not run */
-    double seconds;
-} pz_prepare_step;
-
-/** Counts and figures of one preparation. */
-typedef struct pz_prepare_report {
-    pz_prepare_step steps[PZ_PREPARE_STEP_COUNT];
-    int32_t input_vertices, input_faces;
-    int32_t welded_vertices;         /* vertices merged into another by welding */
-    int32_t seam_edges;              /* welded edges (between two formerly separate faces) */
-    int32_t nonfinite_faces;         /* faces dropped for a NaN/Inf corner */
-    int32_t degenerate_faces, duplicate_faces;
-    int32_t nonmanifold_edge_faces;  /* faces dropped beyond the first two on an edge */
-    int32_t split_vertices;          /* copies made to split non-manifold vertices */
-    int32_t flipped_faces;
-    int32_t components, dropped_components, dropped_component_faces;
-    int32_t decimated_faces;         /* faces after decimation; 0 when it did not run */
-    double target_edge;              /* mm; 0 when remeshing did not run */
-    int32_t output_vertices, output_faces;
-    double bbox_diagonal;            /* of the repaired rest input, mm */
-    double hausdorff;                /* symmetric sampled Hausdorff distance, rest pose, mm (0 when unchanged) */
-    double hausdorff_bound;          /* 0.005 x bbox_diagonal */
-    double pose_hausdorff_max;       /* largest over the extra poses (each against its own input pose) */
-    int within_bound;                /* 1 when every Hausdorff distance is under the bound */
-    double min_angle_over_20_fraction; /* fraction of output faces whose smallest angle exceeds 20 degrees */
-} pz_prepare_report;
-
-/** A prepared mesh, its seams as polylines of its vertices, and the report. */
-typedef struct pz_prepare_result {
-    pz_mesh *mesh;            /* manifold, oriented; poses and labels carried over, UVs dropped when remeshed */
-    int32_t seam_count;
-    int32_t *seam_offsets;    /* seam_count + 1 */
-    int32_t *seam_vertices;   /* polyline i: seam_vertices[seam_offsets[i] .. seam_offsets[i+1]-1] (closed: last == first) */
-    pz_prepare_report report;
-} pz_prepare_result;
-
-/**
- * Makes a scan or an export ready for the field, tracing and flattening:
- * weld, repair, drop fragments, decimate huge inputs, remesh isotropically
- * (boundaries and welded seams kept), carry the poses over and measure the
- * Hausdorff distance to the repaired input. `mesh` (in mm) is not changed.
- * Errors: PZ_ERR_INVALID_MESH when nothing is left after repair or a
- * component is not orientable; PZ_ERR_USAGE for a target edge too long for
- * the garment. Notes each step through pz_note. On success *out is a new
- * result the caller owns (pz_prepare_result_free); on failure *out is NULL.
- */
-pz_status pz_prepare(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out, pz_ctx *ctx);
-
-/**
- * pz_prepare with options->automatic set: what `panelize run --prepare auto`
- * calls. Weld, repair and fragments always run; then a mesh over 10000 faces
- * (options->target_faces when set) is remeshed to that count, one with under
- * 95% of its faces free of angles under 20 degrees is remeshed at its own
- * face count. A remesh that moves the shape beyond the Hausdorff bound is
- * tried again at twice the faces (up to 40000, below the input's count), then
- * once at the input's count for a badly shaped input; when none fits the
- * bound it is undone (the repaired input kept). The remesh step's detail says
- * why it ran, or why not (docs/prepare.md). Ownership as pz_prepare.
- */
-pz_status pz_prepare_auto(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out,
-                          pz_ctx *ctx);
-
-/** Frees the result, its mesh and seams, and sets *result to NULL (NULL or *result NULL: nothing). */
-void pz_prepare_result_free(pz_prepare_result **result);
-
-/** Writes the seams as a sketch file {"curves": [[[x,y,z], ...], ...]} (mm), atomically; result stays the caller's. */
-pz_status pz_prepare_write_seams(const pz_prepare_result *result, const char *path, pz_ctx *ctx);
-
-/* ------------------------------------------------------------------------ */
-/* Synthetic garments and surfaces                                            */
-/* ------------------------------------------------------------------------ */
-
-typedef enum pz_shape {
-    PZ_SHAPE_UNKNOWN = 0,
-    PZ_SHAPE_BODICE,          /* sleeveless torso tube: bust, waist, hip; two boundary loops */
-    PZ_SHAPE_SKIRT,           /* flared skirt shaped at the hip; two boundary loops */
-    PZ_SHAPE_SLEEVE,          /* bent tube; two boundary loops */
-    PZ_SHAPE_HEMISPHERE,      /* one boundary loop, positive curvature */
-    PZ_SHAPE_QUARTER_SPHERE,  /* one boundary loop, positive curvature */
-    PZ_SHAPE_SADDLE,          /* one boundary loop, negative curvature */
-    PZ_SHAPE_CYLINDER,        /* developable; two loops, or one with `open` */
-    PZ_SHAPE_CONE             /* developable (truncated); two loops, or one with `open` */
-} pz_shape;
-
-/** Parses a shape name ("bodice", "quarter-sphere", ...); PZ_SHAPE_UNKNOWN otherwise. */
-pz_shape pz_shape_parse(const char *name);
-const char *pz_shape_name(pz_shape shape);
-
-typedef struct pz_generate_options {
-    int32_t target_faces;  /* approximate face count; 0 = 20000. 500 .. 1,000,000 keep well-shaped faces */
-    int32_t pose_count;    /* extra deformed poses (bending, twisting, breathing); 0 = none */
-    int open;              /* cylinder/cone: cut along a ruling into a disk */
-} pz_generate_options;
-
-/**
- * Generates a shape in millimetres at human scale, counter-clockwise faces
- * with normals pointing outward (away from the body), manifold and well shaped.
- * Extra poses share the connectivity. Caller frees *out.
- */
-pz_status pz_generate(pz_shape shape, const pz_generate_options *options, pz_mesh **out, pz_ctx *ctx);
 
 #ifdef __cplusplus
 }

@@ -38,6 +38,7 @@
 #include "field/field.h"
 #include "mesh/mesh.h"
 #include "param/param.h"
+#include "prepare/prepare.h"
 #include "segment/segment.h"
 
 #include <cjson/cJSON.h>

@@ -12,6 +12,8 @@
 #define PZ_TEST_EXPORT_FIXTURES_H
 
 #include "export/export.h"
+#include "generate/generate.h"
+#include "io/io.h"
 #include "param/param.h"
 #include "../test_util.h"
 

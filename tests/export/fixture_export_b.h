@@ -19,6 +19,7 @@
 
 #include "export/export.h"
 #include "../test_util.h"
+#include "generate/generate.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -25,6 +25,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "io/io.h"
 #include "fixture_export_b.h"
 
 #include <stdio.h>

@@ -3,7 +3,7 @@
 # validator with zero errors: the GLBs test_glb writes when PZ_GLB_OUT is set
 # (a bodice in 4 panels with its marker texcoords and seam lines, and the
 # same with a mirrored pair). The validator setup is that of
-# tests/mesh/test_gltf_validator.sh (npm gltf-validator in .tools); without
+# tests/io/test_gltf_validator.sh (npm gltf-validator in .tools); without
 # it the test is skipped (exit 77), except with CI=true.
 #
 # SPDX-License-Identifier: GPL-3.0-or-later

@@ -24,6 +24,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fixture_export_b.h"
 #include "marker_checks.h"
+#include "io/io.h"
 
 #include <stdio.h>
 #include <unistd.h>

@@ -20,6 +20,7 @@
 #include "export_fixtures.h"
 #include "piece_checks.h"
 #include "test_files.h"
+#include "generate/generate.h"
 
 #include <float.h>
 

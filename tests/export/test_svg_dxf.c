@@ -26,6 +26,7 @@
 #include "export_fixtures.h"
 #include "piece_checks.h"
 #include "readers.h"
+#include "generate/generate.h"
 
 static pz_ctx ctx;
 

@@ -13,6 +13,7 @@
  */
 #include "field/field.h"
 #include "test_meshes.h"
+#include "generate/generate.h"
 
 #include <stdio.h>
 

@@ -3,10 +3,14 @@
  * angle defect and developability on meshes with known answers: a unit right
  * triangle, a flat grid (zero defect inside, Laplacian linear precision), a
  * tetrahedron and a cube (Gauss-Bonnet: total defect 4 pi; a cube corner
- * pi / 2), and a needle triangle where acos would lose the angle.
+ * pi / 2), and a needle triangle where acos would lose the angle. Vertex
+ * normals: +z on a flat grid, radial on the regular tetrahedron, weighted by
+ * area at a cube corner (two triangles of a side count twice), flipped with
+ * the faces, (0, 0, 1) at an isolated vertex.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "test_meshes.h"
 
 #include <math.h>
@@ -170,6 +174,58 @@ static void test_closed_surfaces(void)
     pz_mesh_free(&mesh);
 }
 
+static void test_vertex_normals(void)
+{
+    /* Flat grid: +z everywhere, exactly. */
+    pz_mesh *mesh = test_grid(4, 3, TEST_GRID_FLAT, 0, &ctx);
+    double normals[20 * 3];
+    pz_geom_vertex_normals(mesh, normals);
+    int flat = 1;
+    for (int v = 0; v < 20; ++v)
+        flat &= normals[3 * v] == 0 && normals[3 * v + 1] == 0 && normals[3 * v + 2] == 1;
+    CHECK(flat, "flat grid: every vertex normal is +z");
+    pz_mesh_free(&mesh);
+
+    /* Regular tetrahedron: by symmetry each vertex normal points away from the centre, at the vertex. */
+    mesh = test_tetrahedron(&ctx);
+    pz_geom_vertex_normals(mesh, normals);
+    double worst = 0;
+    for (int v = 0; v < 4; ++v)
+        for (int k = 0; k < 3; ++k)
+            worst = fmax(worst, fabs(normals[3 * v + k] - mesh->positions[3 * v + k] / sqrt(3.0)));
+    CHECK(worst < 1e-15, "tetrahedron: vertex normals radial (off by %g)", worst);
+    /* Reversed faces reverse the normals. */
+    for (int f = 0; f < 4; ++f) {
+        int32_t swap = mesh->faces[3 * f + 1];
+        mesh->faces[3 * f + 1] = mesh->faces[3 * f + 2];
+        mesh->faces[3 * f + 2] = swap;
+    }
+    double reversed[4 * 3];
+    pz_geom_vertex_normals(mesh, reversed);
+    worst = 0;
+    for (int i = 0; i < 12; ++i)
+        worst = fmax(worst, fabs(reversed[i] + normals[i]));
+    CHECK(worst < 1e-15, "reversed faces: reversed normals (off by %g)", worst);
+    pz_mesh_free(&mesh);
+
+    /* Unit cube corner 0: both bottom (-z) and both front (-y) triangles use it, one left (-x) triangle:
+     * the area-weighted sum is (-1, -2, -2), its direction (-1, -2, -2) / 3. Vertex 8 is used by no face. */
+    static const double cube_positions[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1,
+                                            1, 0, 1, 1, 1, 1, 0, 1, 1, 5, 5, 5};
+    static const int32_t cube_faces[] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                         1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+    mesh = test_mesh_from(9, cube_positions, 12, cube_faces, &ctx);
+    pz_geom_vertex_normals(mesh, normals);
+    CHECK(near(normals[0], -1.0 / 3, 1e-15) && near(normals[1], -2.0 / 3, 1e-15) && near(normals[2], -2.0 / 3, 1e-15),
+          "cube corner normal (%g %g %g), want (-1 -2 -2) / 3", normals[0], normals[1], normals[2]);
+    CHECK(normals[24] == 0 && normals[25] == 0 && normals[26] == 1, "isolated vertex: (0, 0, 1)");
+    worst = 0;
+    for (int v = 0; v < 9; ++v)
+        worst = fmax(worst, fabs(hypot(hypot(normals[3 * v], normals[3 * v + 1]), normals[3 * v + 2]) - 1));
+    CHECK(worst < 1e-15, "unit length (off by %g)", worst);
+    pz_mesh_free(&mesh);
+}
+
 /* Gauss-Bonnet on real disks (INVENTORY.md: one boundary loop): the defects
  * sum to 2 pi; a hemisphere is curved (some developability error), and its
  * area is 2 pi r^2 within the chordal loss. */
@@ -232,6 +288,7 @@ int main(void)
     test_needle();
     test_flat_grid();
     test_closed_surfaces();
+    test_vertex_normals();
     test_real_meshes();
     return test_finish();
 }

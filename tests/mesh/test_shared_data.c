@@ -13,6 +13,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "io/io.h"
 #include "mesh/mesh.h"
 #include "test_util.h"
 

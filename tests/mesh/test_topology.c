@@ -6,6 +6,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "test_meshes.h"
 
 #include <string.h>

@@ -13,6 +13,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "generate/generate.h"
 #include "param/param.h"
 #include "test_meshes.h"
 

@@ -45,6 +45,8 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "generate/generate.h"
+#include "io/io.h"
 #include "param/param.h"
 #include "test_meshes.h"
 

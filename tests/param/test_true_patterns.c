@@ -42,6 +42,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "param/param.h"
 #include "test_util.h"
 

@@ -12,6 +12,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "io/io.h"
 #include "pipeline/internal.h"
 
 #include "test_files.h"

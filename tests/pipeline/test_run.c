@@ -17,6 +17,8 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "generate/generate.h"
+#include "io/io.h"
 #include "pipeline/pipeline.h"
 
 #include "test_files.h"

@@ -17,6 +17,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "generate/generate.h"
 #include "segment/segment.h"
 #include "test_meshes.h"
 

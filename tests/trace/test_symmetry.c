@@ -14,6 +14,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
+#include "generate/generate.h"
 #include "segment/segment.h"
 #include "test_meshes.h"
 #include "trace_fixtures.h"

@@ -25,6 +25,8 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
+#include "generate/generate.h"
+#include "io/io.h"
 #include "trace/trace.h"
 #include "test_meshes.h"
 #include "trace_fixtures.h"

@@ -1,11 +1,12 @@
 /*
- * tests/mesh/test_io_ply.c -- the PLY reader on files built byte by byte:
+ * tests/io/test_io_ply.c -- the PLY reader on files built byte by byte:
  * ascii, binary little and big endian, every scalar type in some role,
  * skipped properties, lists and elements, element order, UVs, labels, and
  * every failure path (bad header, truncation, out-of-range index, huge counts).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "test_meshes.h"
 
 #include <stdint.h>

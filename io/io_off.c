@@ -1,5 +1,5 @@
 /*
- * mesh/io_off.c -- Geomview OFF reader.
+ * io/io_off.c -- Geomview OFF reader.
  *
  * Format: a header keyword, the counts "NV NF [NE]" (on the header line or
  * the next one), NV vertex lines "x y z ...", then NF face lines
@@ -20,7 +20,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh.h"
+#include "io/io.h"
 #include "core/util.h"
 
 #include <stdint.h>

@@ -1,7 +1,7 @@
 /*
- * mesh/cgal_shim.h -- the three CGAL operations mesh/prepare.c needs, behind
+ * prepare/cgal_shim.h -- the three CGAL operations prepare/ needs, behind
  * plain C: edge-collapse decimation, isotropic remeshing and closest-point
- * queries. Only C types cross this header; mesh/cgal_shim.cpp is the one
+ * queries. Only C types cross this header; prepare/cgal_shim.cpp is the one
  * C++ file that includes CGAL, and it catches every exception at the
  * boundary (a pz_status and a one-line message come back instead).
  *
@@ -10,7 +10,7 @@
 #ifndef PZ_CGAL_SHIM_H
 #define PZ_CGAL_SHIM_H
 
-#include "mesh.h"
+#include "mesh/mesh.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -20,7 +20,7 @@ extern "C" {
  * A bare triangle surface with a set of constrained edges (the welded seams
  * to keep). Arrays are malloc'd; pz_cgal_surface_clear frees them.
  * The input of decimate and remesh must be edge-manifold and consistently
- * oriented (mesh/prepare.c repairs it first).
+ * oriented (prepare/repair.c repairs it first).
  */
 typedef struct pz_cgal_surface {
     int32_t vertex_count, face_count, edge_count;

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# tests/mesh/test_gltf_validator.sh -- every GLB panelize writes passes the
+# tests/io/test_gltf_validator.sh -- every GLB panelize writes passes the
 # Khronos glTF validator with zero errors.
 #
 # GLBs checked: the samples test_gltf writes when PZ_GLB_OUT is set (a plain

@@ -1,15 +1,18 @@
 /*
- * mesh/gltf_shim.h -- the GLB writer for a coloured, textured garment with
- * seam lines (garment.glb of the export stage), behind plain C. The function
- * lives in mesh/gltf_shim.cpp (tinygltf stays in that one C++ file); only C
- * types cross this header.
+ * export/glb_shim.h -- private to export/: the GLB writer for a coloured,
+ * textured garment with seam lines (garment.glb, export/glb.c), behind plain
+ * C. The function lives in export/glb_shim.cpp (tinygltf stays in that one
+ * C++ file of export); only C types cross this header.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#ifndef PZ_GLTF_SHIM_H
-#define PZ_GLTF_SHIM_H
+#ifndef PZ_EXPORT_GLB_SHIM_H
+#define PZ_EXPORT_GLB_SHIM_H
 
-#include "mesh.h"
+#include "mesh/mesh.h"
+
+#include <stdint.h>
+#include <stdio.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -20,7 +23,7 @@ typedef struct pz_glb_garment {
     int32_t vertex_count;
     const double *positions;      /* vertex_count x 3 (mm) */
     const int32_t *vertex_group;  /* vertex_count: colour index of each vertex, >= 0 (0-11: the palette of
-                                     pz_glb_write; above: hues a golden angle apart) */
+                                     pz_glb_label_color, io/io.h; above: hues a golden angle apart) */
     const double *texcoords;      /* vertex_count x 2, panelize's convention (v up; flipped for glTF), or NULL */
     int32_t face_count;
     const int32_t *faces;         /* face_count x 3 */
@@ -48,4 +51,4 @@ pz_status pz_glb_write_garment(const pz_glb_garment *garment, FILE *file, const 
 }
 #endif
 
-#endif /* PZ_GLTF_SHIM_H */
+#endif /* PZ_EXPORT_GLB_SHIM_H */

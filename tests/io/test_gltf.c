@@ -1,5 +1,5 @@
 /*
- * tests/mesh/test_gltf.c -- glTF reading and GLB writing (mesh/gltf_shim.cpp).
+ * tests/io/test_gltf.c -- glTF reading and GLB writing (io/gltf_read.cpp, io/gltf_write.cpp).
  *
  *  - A grid with a UV seam, two labels, two poses and an unreferenced vertex
  *    survives GLB write -> read: counts, face indices (through _PZ_VERTEX_ID),
@@ -17,12 +17,15 @@
  *    with no base_dir or outside it -> PZ_ERR_DATA naming the input.
  *  - OBJ -> GLB -> OBJ through pz_mesh_read / pz_mesh_write keeps counts and
  *    indices exactly.
+ *  - The palette (12 distinct opaque colours, wrapping) and the sRGB ->
+ *    linear conversion of both curve segments.
  * With PZ_GLB_OUT set, the GLBs are also left in that directory for
- * tests/mesh/test_gltf_validator.sh.
+ * tests/io/test_gltf_validator.sh.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "io/io.h"
 #include "mesh/mesh.h"
 #include "test_files.h"
 
@@ -736,6 +739,32 @@ static void test_obj_glb_obj(void)
     pz_mesh_free(&back);
 }
 
+/* The GLB writers' palette and glTF's linear colours (pz_glb_label_color, pz_glb_color_linear). */
+static void test_colours(void)
+{
+    CHECK(pz_glb_label_color(0) == 0x4e79a7ffu, "palette colour 0 is %08x", (unsigned)pz_glb_label_color(0));
+    int distinct = 1, opaque = 1;
+    for (int32_t a = 0; a < 12; ++a) {
+        opaque &= (pz_glb_label_color(a) & 0xff) == 0xff;
+        for (int32_t b = 0; b < a; ++b)
+            distinct &= pz_glb_label_color(a) != pz_glb_label_color(b);
+    }
+    CHECK(distinct && opaque, "the 12 palette colours are distinct and opaque");
+    CHECK(pz_glb_label_color(12) == pz_glb_label_color(0) && pz_glb_label_color(29) == pz_glb_label_color(5),
+          "labels past 12 wrap round the palette");
+    double white[4], black[4], mixed[4];
+    pz_glb_color_linear(0xffffffffu, white);
+    pz_glb_color_linear(0x000000ffu, black);
+    pz_glb_color_linear(0x800a0080u, mixed);
+    CHECK(white[0] == 1 && white[1] == 1 && white[2] == 1 && white[3] == 1, "white stays white");
+    CHECK(black[0] == 0 && black[1] == 0 && black[2] == 0 && black[3] == 1, "black stays black, opaque");
+    /* sRGB 0x80 is the power segment, 0x0a (under 0.04045) the linear one; alpha is not converted. */
+    double half = pow((128.0 / 255.0 + 0.055) / 1.055, 2.4);
+    CHECK(fabs(mixed[0] - half) < 1e-15 && fabs(half - 0.2158605) < 1e-6, "sRGB 0x80 -> %g", mixed[0]);
+    CHECK(fabs(mixed[1] - 10.0 / 255.0 / 12.92) < 1e-15, "sRGB 0x0a -> %g", mixed[1]);
+    CHECK(mixed[2] == 0 && fabs(mixed[3] - 128.0 / 255.0) < 1e-15, "blue 0, alpha 0x80 -> %g", mixed[3]);
+}
+
 /* Leaves GLBs for the validator test: plain, UVs + labels, everything. */
 static void write_validator_samples(const char *directory)
 {
@@ -764,6 +793,7 @@ int main(void)
     test_bad_inputs();
     test_external_files();
     test_obj_glb_obj();
+    test_colours();
     const char *samples = getenv("PZ_GLB_OUT");
     if (samples && *samples)
         write_validator_samples(samples);

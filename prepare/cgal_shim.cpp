@@ -1,5 +1,5 @@
 /*
- * mesh/cgal_shim.cpp -- decimation, isotropic remeshing and closest points
+ * prepare/cgal_shim.cpp -- decimation, isotropic remeshing and closest points
  * with CGAL, behind the plain-C interface of cgal_shim.h. The only file that
  * includes CGAL (its compile unit is heavy: keep it to these three calls).
  *
@@ -21,7 +21,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "cgal_shim.h"
+#include "prepare/cgal_shim.h"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>

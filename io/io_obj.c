@@ -1,5 +1,5 @@
 /*
- * mesh/io_obj.c -- Wavefront OBJ reader and writer.
+ * io/io_obj.c -- Wavefront OBJ reader and writer.
  *
  * Reading. The whole file is in memory; one pass walks it line by line
  * (memchr for '\n', so lines of any length cost nothing extra and '\r',
@@ -43,7 +43,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh.h"
+#include "io/io.h"
 #include "core/util.h"
 
 #include <math.h>

@@ -1,10 +1,11 @@
 /*
- * tests/mesh/test_io_obj.c -- the OBJ reader on small hand-written files:
+ * tests/io/test_io_obj.c -- the OBJ reader on small hand-written files:
  * every face corner form, negative and forward indices, polygons, groups,
  * UV rules, line endings, exact numbers, and every failure path.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "test_meshes.h"
 
 #include <math.h>

@@ -1,5 +1,5 @@
 /*
- * mesh/generate.c -- synthetic garments and test surfaces (pz_generate).
+ * generate/generate.c -- synthetic garments and test surfaces (pz_generate).
  *
  * Every shape is a parametric surface P(v, t) sampled by one of two meshers
  * (docs/generate.md has the dimensions and the pictures in words):
@@ -41,7 +41,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh.h"
+#include "generate/generate.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -1,5 +1,5 @@
 /*
- * mesh/io_ply.c -- Stanford PLY reader and writer.
+ * io/io_ply.c -- Stanford PLY reader and writer.
  *
  * Reading. The header ("ply", "format ...", "element NAME COUNT",
  * "property TYPE NAME", "property list COUNT_TYPE ITEM_TYPE NAME", comments,
@@ -36,7 +36,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh.h"
+#include "io/io.h"
 #include "core/util.h"
 
 #include <math.h>

@@ -1,5 +1,5 @@
 /*
- * tests/mesh/test_prepare.c -- scan-ready input (mesh/prepare.c, issue 8):
+ * tests/prepare/test_prepare.c -- scan-ready input (prepare/prepare.c, issue 8):
  *  - a generated bodice corrupted on purpose (vertex noise, 1% duplicated
  *    faces, three non-manifold vertices, 20 tiny fragments, a slice of
  *    slivers, flipped faces, NaN corners, fins: a third face on an edge)
@@ -31,7 +31,10 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "mesh/cgal_shim.h"
+#include "generate/generate.h"
+#include "io/io.h"
+#include "prepare/cgal_shim.h"
+#include "prepare/prepare.h"
 #include "test_meshes.h"
 
 #include <math.h>

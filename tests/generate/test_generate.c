@@ -1,5 +1,5 @@
 /*
- * tests/mesh/test_generate.c -- the synthetic shapes of pz_generate.
+ * tests/generate/test_generate.c -- the synthetic shapes of pz_generate.
  *
  * For every shape (and the open cylinder and cone) at ~2000 faces, and some
  * at 500 and 200,000: the mesh validates, has one component of genus 0 with
@@ -13,6 +13,8 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "core/vec.h"
+#include "generate/generate.h"
 #include "mesh/mesh.h"
 #include "test_util.h"
 
@@ -20,8 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TEST_PI 3.14159265358979323846
-#define DEGREES (TEST_PI / 180.0)
+#define DEGREES (PZ_PI / 180.0)
 
 /* What each shape must look like: loops, bounding box (each bound within `slack` mm of the value). */
 typedef struct expectation {
@@ -55,21 +56,6 @@ static pz_mesh *generate(pz_shape shape, int32_t faces, int32_t poses, int open)
     return mesh;
 }
 
-static void sub3(const double *a, const double *b, double *out)
-{
-    for (int k = 0; k < 3; ++k)
-        out[k] = a[k] - b[k];
-}
-
-static void cross3(const double *u, const double *w, double *out)
-{
-    out[0] = u[1] * w[2] - u[2] * w[1];
-    out[1] = u[2] * w[0] - u[0] * w[2];
-    out[2] = u[0] * w[1] - u[1] * w[0];
-}
-
-static double dot3(const double *u, const double *w) { return u[0] * w[0] + u[1] * w[1] + u[2] * w[2]; }
-
 static void face_centroid(const pz_mesh *mesh, const double *positions, int32_t f, double *out)
 {
     out[0] = out[1] = out[2] = 0.0;
@@ -83,9 +69,9 @@ static void face_cross(const pz_mesh *mesh, const double *positions, int32_t f, 
 {
     const int32_t *c = mesh->faces + 3 * f;
     double u[3], w[3];
-    sub3(positions + 3 * c[1], positions + 3 * c[0], u);
-    sub3(positions + 3 * c[2], positions + 3 * c[0], w);
-    cross3(u, w, out);
+    pz_vec3_sub(positions + 3 * c[1], positions + 3 * c[0], u);
+    pz_vec3_sub(positions + 3 * c[2], positions + 3 * c[0], w);
+    pz_vec3_cross(u, w, out);
 }
 
 /*
@@ -97,8 +83,8 @@ static double capped_volume(const pz_mesh *mesh, const pz_loops *loops)
     double volume = 0.0, cross[3];
     for (int32_t f = 0; f < mesh->face_count; ++f) {
         const int32_t *c = mesh->faces + 3 * f;
-        cross3(mesh->positions + 3 * c[1], mesh->positions + 3 * c[2], cross);
-        volume += dot3(mesh->positions + 3 * c[0], cross) / 6.0;
+        pz_vec3_cross(mesh->positions + 3 * c[1], mesh->positions + 3 * c[2], cross);
+        volume += pz_vec3_dot(mesh->positions + 3 * c[0], cross) / 6.0;
     }
     for (int32_t l = 0; l < loops->loop_count; ++l) {
         int32_t begin = loops->loop_offsets[l], end = loops->loop_offsets[l + 1];
@@ -110,8 +96,8 @@ static double capped_volume(const pz_mesh *mesh, const pz_loops *loops)
         for (int32_t i = begin; i < end; ++i) {
             const double *p = mesh->positions + 3 * loops->loop_vertices[i];
             const double *q = mesh->positions + 3 * loops->loop_vertices[i + 1 < end ? i + 1 : begin];
-            cross3(q, p, cross);
-            volume += dot3(center, cross) / 6.0;
+            pz_vec3_cross(q, p, cross);
+            volume += pz_vec3_dot(center, cross) / 6.0;
         }
     }
     return volume;
@@ -122,9 +108,9 @@ static double loop_length(const pz_mesh *mesh, const pz_loops *loops, int32_t l)
     int32_t begin = loops->loop_offsets[l], end = loops->loop_offsets[l + 1];
     double length = 0.0, d[3];
     for (int32_t i = begin; i < end; ++i) {
-        sub3(mesh->positions + 3 * loops->loop_vertices[i],
-             mesh->positions + 3 * loops->loop_vertices[i + 1 < end ? i + 1 : begin], d);
-        length += sqrt(dot3(d, d));
+        pz_vec3_sub(mesh->positions + 3 * loops->loop_vertices[i],
+                    mesh->positions + 3 * loops->loop_vertices[i + 1 < end ? i + 1 : begin], d);
+        length += sqrt(pz_vec3_dot(d, d));
     }
     return length;
 }
@@ -187,7 +173,7 @@ static double outward_fraction(const pz_mesh *mesh, pz_shape shape)
             away[0] = c[0], away[1] = c[1], away[2] = 0;        /* from the vertical axis */
         }
         ++counted;
-        outward += dot3(n, away) > 0.0;
+        outward += pz_vec3_dot(n, away) > 0.0;
     }
     return counted ? (double)outward / counted : 0.0;
 }
@@ -364,7 +350,7 @@ static void check_skirt_and_sleeve(void)
             const double *p = sleeve->positions + 3 * loops->loop_vertices[i];
             const double *q = sleeve->positions + 3 * loops->loop_vertices[i + 1 < end ? i + 1 : begin];
             double c[3];
-            cross3(p, q, c);
+            pz_vec3_cross(p, q, c);
             for (int d = 0; d < 3; ++d)
                 normals[l][d] += c[d];
         }
@@ -372,7 +358,8 @@ static void check_skirt_and_sleeve(void)
     double top = fmax(lengths[0], lengths[1]), wrist = fmin(lengths[0], lengths[1]);
     CHECK(fabs(top - 320.0) < 5.0, "sleeve: top girth %.1f", top);
     CHECK(fabs(wrist - 220.0) < 5.0, "sleeve: wrist girth %.1f", wrist);
-    double cosine = -dot3(normals[0], normals[1]) / sqrt(dot3(normals[0], normals[0]) * dot3(normals[1], normals[1]));
+    double cosine = -pz_vec3_dot(normals[0], normals[1]) /
+                    sqrt(pz_vec3_dot(normals[0], normals[0]) * pz_vec3_dot(normals[1], normals[1]));
     double bend = acos(fmin(1.0, fmax(-1.0, cosine))) / DEGREES;
     CHECK(bend > 30.0 && bend < 40.0, "sleeve: elbow bend %.1f degrees", bend);
     pz_loops_free(&loops);
@@ -402,8 +389,8 @@ static void check_poses(pz_shape shape, int32_t pose_count)
             double rest[3], posed[3];
             face_cross(mesh, mesh->positions, f, rest);
             face_cross(mesh, pose, f, posed);
-            double ratio = sqrt(dot3(posed, posed) / dot3(rest, rest));
-            inverted += dot3(rest, posed) <= 0.0;
+            double ratio = sqrt(pz_vec3_dot(posed, posed) / pz_vec3_dot(rest, rest));
+            inverted += pz_vec3_dot(rest, posed) <= 0.0;
             low = fmin(low, ratio);
             high = fmax(high, ratio);
         }
@@ -423,7 +410,7 @@ static void check_pose_amplitudes(void)
     for (int32_t v = 0; v < mesh->vertex_count; ++v) {
         const double *p = mesh->positions + 3 * v;
         if (p[2] > 599.0)
-            top_turn = fmax(top_turn, fabs(remainder(atan2(twist[3 * v + 1], twist[3 * v]) - atan2(p[1], p[0]), 2.0 * TEST_PI)));
+            top_turn = fmax(top_turn, fabs(remainder(atan2(twist[3 * v + 1], twist[3 * v]) - atan2(p[1], p[0]), 2.0 * PZ_PI)));
         double scale = hypot(breath[3 * v], breath[3 * v + 1]) / hypot(p[0], p[1]);
         scale_low = fmin(scale_low, scale);
         scale_high = fmax(scale_high, scale);

@@ -1,5 +1,5 @@
 /*
- * tests/mesh/test_io_roundtrip.c -- write -> read through files: OBJ and PLY
+ * tests/io/test_io_roundtrip.c -- write -> read through files: OBJ and PLY
  * keep positions bit for bit, faces, UVs (OBJ: per corner with seams; PLY:
  * per vertex) and labels with their names; the dispatcher's format detection
  * and error paths (missing file, directory, unknown extension, unwritable
@@ -8,6 +8,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
+#include "io/io.h"
 #include "mesh/mesh.h"
 #include "test_files.h"
 

@@ -1,5 +1,5 @@
 /*
- * mesh/io.c -- reading and writing meshes by file name.
+ * io/io.c -- reading and writing meshes by file name.
  *
  * The format comes from the extension (case-insensitive): .obj, .ply, .off,
  * .glb, .gltf. A file is read whole into memory (one buffer, grown by
@@ -17,7 +17,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
-#include "mesh.h"
+#include "io/io.h"
 
 #include <errno.h>
 #include <stdlib.h>

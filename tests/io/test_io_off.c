@@ -1,9 +1,10 @@
 /*
- * tests/mesh/test_io_off.c -- the OFF reader: header variants, counts on the
+ * tests/io/test_io_off.c -- the OFF reader: header variants, counts on the
  * header line, comments, colours, polygons, and every failure path.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "io/io.h"
 #include "test_meshes.h"
 
 #include <string.h>
