@@ -361,7 +361,7 @@ if [ -n "$DATA" ] && [ -f "$DATA/seams/skirt_0.obj" ]; then
     grain_ignores() { ! grain_follows "$@" 2>/dev/null; }
     check "skirt --grain 0,0,1: the warp still follows y" grain_ignores skirt-z 1 0.95
 else
-    echo "SKIPPED: the skirt's grain (no \$PZ_SHARED_DATA/seams)"
+    skip_part "the skirt's grain (no \$PZ_SHARED_DATA/seams)"
 fi
 
 # ------------------------------------------------------------------ panelize run with the other back-ends

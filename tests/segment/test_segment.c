@@ -426,7 +426,9 @@ static int shared_garment(const char *name, garment *out)
 {
     const char *data = test_shared_data();
     if (!data) {
-        printf("%s: no ../shared/data, skipped\n", name);
+        char why[256];
+        snprintf(why, sizeof why, "%s (no ../shared/data)", name);
+        test_skip_part(why);
         return 0;
     }
     char path[4096];
