@@ -8,9 +8,11 @@
  *  - IISERM: on a 5K-face hemisphere patch (60-degree cap), heap relaxation
  *    does at least 5x less work than full relaxation (a deterministic count of
  *    node moves, global iterations counted as one move per vertex: the clock
- *    is bench_springmass's job) and its remaining energy is at most 10% above
- *    full relaxation's; the same with the paper's node sweeps alone in phase
- *    two (local_release_only); multi-path does more work than single path;
+ *    is bench_springmass's job); its phase one leaves more energy, and the
+ *    global release of phase two ends both within 0.1% of each other; with
+ *    the paper's node sweeps alone in phase two (local_release_only) heap
+ *    still does 5x less work and ends at most 10% above full relaxation's
+ *    energy; multi-path does more work than single path;
  *  - orthotropic: changes the pattern, lowers the orthotropic energy (as
  *    pz_metrics_compute measures it) against the isotropic springs, and the
  *    warp follows the grain given (x or y) near the seed;
@@ -201,8 +203,13 @@ static void test_heap_versus_full(void)
     CHECK(pattern->mesh->face_count >= 4800 && pattern->mesh->face_count <= 5500, "patch has %d faces",
           (int)pattern->mesh->face_count);
     CHECK(5 * work(&rh, nv) <= work(&rf, nv), "heap %.0f vs full %.0f node moves", work(&rh, nv), work(&rf, nv));
-    CHECK(rh.final_energy <= 1.1 * rf.final_energy, "remaining energy heap %g full %g", rh.final_energy,
-          rf.final_energy);
+    /* Both end with the same global release to the springs' minimum, which hides phase one: heap's phase one
+     * leaves more energy than full's, and phase two takes both to the same end (within 0.1%). The claim
+     * proper (heap within 10% of full) is checked below with the node sweeps alone in phase two. */
+    CHECK(rh.phase_one_energy > rf.phase_one_energy, "phase one: heap left %g, full %g", rh.phase_one_energy,
+          rf.phase_one_energy);
+    CHECK(fabs(rh.final_energy - rf.final_energy) <= 1e-3 * rf.final_energy, "remaining energy heap %g full %g",
+          rh.final_energy, rf.final_energy);
     CHECK(rm.phase_one_relaxations > rh.phase_one_relaxations, "multi-path %lld vs single %lld",
           rm.phase_one_relaxations, rh.phase_one_relaxations);
     /* the paper's node sweeps alone in phase two (no global release) still meet the claim */
