@@ -5,6 +5,9 @@
  * REQUIRE stops the test. A test's main ends with `return test_finish();`
  * which prints "N passed, M failed" and returns 1 when anything failed.
  * test_skip("why") prints the reason and exits 77 (ctest's SKIP_RETURN_CODE).
+ * test_skip_part("why") is for a part that cannot run (its data or a tool
+ * missing) while the rest goes on: printed, and test_finish then returns 77
+ * unless a check failed, so ctest shows the test as skipped, not passed.
  * REQUIRE_OK(call, ctx) requires a pz_status call to return PZ_OK.
  * test_strdup copies a string (REQUIRE on out of memory).
  *
@@ -23,6 +26,7 @@
 static int test_checks_passed;
 static int test_checks_failed;
 static int test_check_result; /* the last CHECK's outcome: REQUIRE must not evaluate twice */
+static int test_parts_skipped;
 
 #define CHECK(cond, ...)                                                   \
     do {                                                                   \
@@ -52,14 +56,24 @@ static int test_check_result; /* the last CHECK's outcome: REQUIRE must not eval
 
 static inline int test_finish(void)
 {
-    printf("%d passed, %d failed\n", test_checks_passed, test_checks_failed);
-    return test_checks_failed ? 1 : 0;
+    printf("%d passed, %d failed", test_checks_passed, test_checks_failed);
+    if (test_parts_skipped)
+        printf(", %d part%s skipped", test_parts_skipped, test_parts_skipped == 1 ? "" : "s");
+    putchar('\n');
+    return test_checks_failed ? 1 : test_parts_skipped ? 77 : 0;
 }
 
 static inline void test_skip(const char *why)
 {
     printf("SKIPPED: %s\n", why);
     exit(77);
+}
+
+/* A part of the test cannot run here (why: its data or a tool is missing); the rest goes on. */
+static inline void test_skip_part(const char *why)
+{
+    printf("SKIPPED part: %s\n", why);
+    ++test_parts_skipped;
 }
 
 /* A malloc'd copy of text (free it); stops the test when out of memory. */

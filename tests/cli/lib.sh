@@ -7,7 +7,9 @@
 # else build/panelize) and skips the test (exit 77) without one, then makes a
 # scratch directory $WORK (removed on exit) and changes into it.
 # A test ends with `finish`, which prints "N passed, M failed" and fails when
-# anything did.
+# anything did; a part that cannot run here (its data or a tool missing) calls
+# `skip_part WHY`, and `finish` then exits 77 (ctest's skip) unless a check
+# failed, so the test shows as skipped rather than passed.
 #
 # SPDX-License-Identifier: GPL-3.0-or-later
 
@@ -24,17 +26,25 @@ cd "$WORK" || exit 1
 # ------------------------------------------------------------------ counting
 passed=0
 failed=0
+parts_skipped=0
 pass() { passed=$((passed + 1)); }
 fail() { failed=$((failed + 1)); echo "FAIL: $*"; }
+skip_part() { parts_skipped=$((parts_skipped + 1)); echo "SKIPPED part: $*"; }
 check() { # check DESCRIPTION COMMAND...: passes when the command succeeds
     local what=$1; shift
     if "$@"; then pass; else fail "$what"; fi
 }
 
-# finish: the summary line; the script's last command, so its status is the test's.
+# finish: the summary line; the script's last command, so its status is the test's
+# (1 when a check failed, else 77 when a part was skipped, else 0).
 finish() {
-    echo "$passed passed, $failed failed"
-    [ "$failed" -eq 0 ]
+    if [ "$parts_skipped" -eq 0 ]; then
+        echo "$passed passed, $failed failed"
+    else
+        echo "$passed passed, $failed failed, $parts_skipped skipped part(s)"
+    fi
+    [ "$failed" -eq 0 ] || return 1
+    [ "$parts_skipped" -eq 0 ] || return 77
 }
 
 # ------------------------------------------------------------------ running panelize

@@ -7,7 +7,9 @@
 # (a meridian) from --features, and a dangling key curve gives no flipped
 # face; springmass writes energy.svg, a per-vertex
 # energy map over the pattern's vertices and a cutting line per panel, with
-# both relaxations, heap ending within 10% of full relaxation's energy;
+# both relaxations; heap's phase one does at least 5x less work than full's
+# and leaves more energy, and the shared phase two ends both at the same
+# energy (within 0.1%);
 # report.json carries every back-end's own outcome
 # (backend_result); a curve off the mesh is left out with a warning and
 # listed in report.json; key curves that over-constrain the pattern (the
@@ -276,11 +278,21 @@ assert len(polygons) >= 1000, len(polygons)  # one per triangle of the 2000-face
 assert len(lines) >= 1, "no cutting line"
 PY
 done
-# IISERM's claim end to end: heap relaxation leaves no more than 10% more energy than full relaxation.
-check "springmass: heap leaves more than 10% more energy than full" python3 - hemi-heap/report.json hemi-full/report.json <<'PY'
+# Heap against full relaxation end to end. Both end with the same phase two (a global release to the
+# springs' minimum, then node sweeps), so their final energies say nothing about phase one: compare
+# phase one itself (report.json gives its work and the energy it leaves). IISERM's trade: heap relaxes
+# far fewer nodes (at least 5x; measured 169x) and leaves more energy (measured 65% more), which phase
+# two then removes: both end within 0.1% of each other (measured 0.001%; the node sweeps alone leave a
+# gap of several percent, docs/springmass.md).
+check "springmass: heap against full relaxation, phase one and the end" python3 - hemi-heap/report.json hemi-full/report.json <<'PY'
 import json, sys
-heap, full = (json.load(open(path))['backend_result']['final_energy'] for path in sys.argv[1:3])
-assert heap <= 1.1 * full, (heap, full)
+heap, full = (json.load(open(path))['backend_result'] for path in sys.argv[1:3])
+print("heap / full: phase one %d / %d node moves, energy %.6g / %.6g; final energy %.6g / %.6g" % (
+    heap['phase_one_relaxations'], full['phase_one_relaxations'], heap['phase_one_energy'],
+    full['phase_one_energy'], heap['final_energy'], full['final_energy']))
+assert 5 * heap['phase_one_relaxations'] <= full['phase_one_relaxations'], "heap's phase one is not 5x less work"
+assert heap['phase_one_energy'] > full['phase_one_energy'], "heap's phase one left no more energy than full's"
+assert abs(heap['final_energy'] - full['final_energy']) <= 1e-3 * full['final_energy'], "phase two ends apart"
 PY
 # All or nothing with energy.svg too: report.json cannot be written (a directory is in its way), so
 # energy.svg, already in place, is removed again with the rest.
@@ -361,7 +373,7 @@ if [ -n "$DATA" ] && [ -f "$DATA/seams/skirt_0.obj" ]; then
     grain_ignores() { ! grain_follows "$@" 2>/dev/null; }
     check "skirt --grain 0,0,1: the warp still follows y" grain_ignores skirt-z 1 0.95
 else
-    echo "SKIPPED: the skirt's grain (no \$PZ_SHARED_DATA/seams)"
+    skip_part "the skirt's grain (no \$PZ_SHARED_DATA/seams)"
 fi
 
 # ------------------------------------------------------------------ panelize run with the other back-ends

@@ -144,7 +144,7 @@ print('surfaces/hemisphere.obj: %d faces, max |strain| %.4f (warp p95 %.4f, weft
     p['faces'], d['summary']['max_abs_strain'], p['strain_warp']['p95'], p['strain_weft']['p95'], d['summary']['injective']))
 " shared-hemi/report.json
 else
-    echo "SKIPPED: the shared hemisphere (no \$PZ_SHARED_DATA/surfaces)"
+    skip_part "the shared hemisphere (no \$PZ_SHARED_DATA/surfaces)"
 fi
 
 # ------------------------------------------------------------------ panels from a file, OBJ groups, poses
@@ -223,7 +223,7 @@ if [ -n "$DATA" ] && [ -f "$DATA/seams/skirt_0.obj" ]; then
     expect_error 64 dart.txt --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --darts dart.txt
     expect_error 64 --pose --absent bad -- flatten "$S/skirt_0.obj" "$S/skirt_1.obj" -o bad --pose x.obj
 else
-    echo "SKIPPED: the skirt panels (no \$PZ_SHARED_DATA/seams)"
+    skip_part "the skirt panels (no \$PZ_SHARED_DATA/seams)"
 fi
 
 # ------------------------------------------------------------------ the T-shirt's own pattern: --panels uv
@@ -239,7 +239,7 @@ if [ -n "$DATA" ] && [ -f "$DATA/garments/diffavatar-tshirt.obj" ]; then
     garment_obj_checks "flatten tshirt --panels uv" "$T" tshirt 4
     svg_checks "flatten tshirt --panels uv" tshirt 4
 else
-    echo "SKIPPED: the T-shirt (no \$PZ_SHARED_DATA/garments)"
+    skip_part "the T-shirt (no \$PZ_SHARED_DATA/garments)"
 fi
 
 # ------------------------------------------------------------------ the skirt's CLO3D pattern: 4 panels, 8 darts
@@ -256,7 +256,7 @@ if [ -n "$DATA" ] && [ -f "$DATA/garments/parafashion-skirt.obj" ]; then
         "dart legs of equal length" "all(x['mismatch_rel'] < 0.02 for x in d['darts'])"
     garment_obj_checks "flatten skirt --panels uv" "$K" skirt-uv 4
 else
-    echo "SKIPPED: the skirt's UV pattern (no \$PZ_SHARED_DATA/garments)"
+    skip_part "the skirt's UV pattern (no \$PZ_SHARED_DATA/garments)"
 fi
 
 # ------------------------------------------------------------------ output directory

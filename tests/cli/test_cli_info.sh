@@ -143,7 +143,7 @@ if [ -n "${PZ_SHARED_DATA:-}" ] && [ -d "$PZ_SHARED_DATA/garments" ]; then
             "d['manifold'] is True and d['components'] == 1 and d['genus'] == 0 and d['boundary_loops'] == ${real#*:}"
     done
 else
-    echo "skipped the real garments: PZ_SHARED_DATA is not set or has no garments/"
+    skip_part "the real garments (PZ_SHARED_DATA is not set or has no garments/)"
 fi
 
 finish

@@ -2,8 +2,9 @@
  * tests/export/readers.h -- running the real readers (ezdxf, the Khronos
  * glTF validator, rsvg-convert, poppler, Python's XML parser) from a C test:
  *  - reader_run: a shell command's exit status;
- *  - reader_available: 1 when a probe command succeeds; else prints that the
- *    reader's checks are skipped, which fails the test when CI=true;
+ *  - reader_available: 1 when a probe command succeeds; else the reader's
+ *    checks are a skipped part (test_skip_part: the test exits 77), which
+ *    fails the test when CI=true;
  *  - reader_passes: CHECKs that a reader's command succeeds, quoting its
  *    output (kept in a log file) when it does not.
  * Needs test_util.h and test_files.h.
@@ -36,7 +37,9 @@ static inline int reader_available(const char *probe, const char *what)
         return 1;
     const char *ci = getenv("CI");
     CHECK(!(ci && strcmp(ci, "true") == 0), "%s is not installed (required when CI=true)", what);
-    printf("%s: not installed, its checks skipped\n", what);
+    char why[300];
+    snprintf(why, sizeof why, "the checks by %s (not installed)", what);
+    test_skip_part(why);
     return 0;
 }
 

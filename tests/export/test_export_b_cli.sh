@@ -6,12 +6,28 @@
 # (a GLB), report.html (self-contained, the strain map and the tables) and
 # report.json's marker object (--fabric-width, --gap), for a generated bodice
 # and, when ../shared/data is there, the T-shirt's own panels (--panels uv).
-# Poppler and rsvg checks are skipped when the tools are missing.
+# Poppler and rsvg checks are skipped when the tools are missing (a skipped
+# part: exit 77; a failure with CI=true, where scripts/install-deps.sh
+# installs them), as is the T-shirt without ../shared/data.
 #
 # SPDX-License-Identifier: GPL-3.0-or-later
 source "$(dirname "$0")/../cli/lib.sh"
 
 have() { command -v "$1" >/dev/null 2>&1; }
+# need TOOL...: succeeds when every tool is here; else a skipped part (a failure under CI=true).
+need() {
+    local tool
+    for tool in "$@"; do
+        have "$tool" && continue
+        if [ "${CI:-}" = true ]; then
+            fail "$tool is not installed (required when CI=true)"
+        else
+            skip_part "the checks by $tool (not installed)"
+        fi
+        return 1
+    done
+    return 0
+}
 py=/usr/bin/python3
 [ -x "$py" ] || py=python3
 
@@ -31,7 +47,7 @@ check_outputs() { # check_outputs DIR WIDTH: every file of this part in DIR
     check "$dir/report.json: marker width" [ "$(json_value "$dir/report.json" "r['marker']['fabric_width_mm']")" = "$width" ]
     check "$dir/report.json: marker efficiency in (0, 1]" \
         [ "$(json_value "$dir/report.json" "0 < r['marker']['efficiency'] <= 1 and r['marker']['length_mm'] > 0")" = True ]
-    if have pdfinfo && have pdftoppm; then
+    if need pdfinfo pdftoppm; then
         check "$dir/pattern.pdf: one page" bash -c "pdfinfo '$dir/pattern.pdf' | grep -q '^Pages: *1$'"
         check "$dir/pattern-tiled.pdf: Letter" bash -c "pdfinfo '$dir/pattern-tiled.pdf' | grep -q '612 x 792'"
         check "$dir/pattern-tiled.pdf: cover and tiles" \
@@ -39,7 +55,7 @@ check_outputs() { # check_outputs DIR WIDTH: every file of this part in DIR
         check "$dir: both PDFs render" bash -c \
             "pdftoppm -r 5 '$dir/pattern.pdf' '$dir/r' && pdftoppm -r 5 '$dir/pattern-tiled.pdf' '$dir/t'"
     fi
-    if have rsvg-convert; then
+    if need rsvg-convert; then
         check "$dir/marker.svg renders" rsvg-convert -o "$dir/marker.png" "$dir/marker.svg"
     fi
 }
@@ -58,6 +74,6 @@ if [ -n "$data" ] && [ -f "$data/garments/diffavatar-tshirt.obj" ]; then
     check_outputs tshirt 1500
     check "tshirt: 4 pieces in the marker" [ "$(json_value tshirt/report.json "r['marker']['pieces']")" = 4 ]
 else
-    echo "note: no ../shared/data, the T-shirt is skipped"
+    skip_part "the T-shirt (no ../shared/data)"
 fi
 finish

@@ -25,6 +25,7 @@
 #include "fixture_export_b.h"
 #include "marker_checks.h"
 #include "io/io.h"
+#include "readers.h"
 
 #include <stdio.h>
 #include <unistd.h>
@@ -110,7 +111,7 @@ static void test_twenty(void)
     CHECK(strstr(text, "width=\"1500.00mm\"") != NULL, "width in mm");
     CHECK(strstr(text, "efficiency") != NULL, "efficiency text");
     free(text);
-    if (system("command -v rsvg-convert >/dev/null 2>&1") == 0) {
+    if (reader_available("command -v rsvg-convert", "rsvg-convert")) {
         snprintf(command, sizeof command, "rsvg-convert -o %s/marker.png %s", dir, path);
         CHECK(system(command) == 0, "rsvg-convert failed on %s", path);
     }
@@ -252,7 +253,7 @@ static void check_garment(const char *dir, const char *file)
         REQUIRE_OK(pz_pattern_panels_from_uv(mesh, face_panel, &panel_count, &extra, &ctx), ctx);
     pz_pattern *pattern = NULL;
     if (pz_pattern_build(mesh, face_panel, extra, NULL, path, &pattern, &ctx) != PZ_OK) {
-        printf("%s: no pattern (%s), skipped\n", file, ctx.error);
+        CHECK(0, "%s: no pattern: %s", file, ctx.error);
         free(extra), free(face_panel), pz_mesh_free(&mesh);
         return;
     }
@@ -308,7 +309,7 @@ static void test_garments(void)
 {
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("garments: skipped (no ../shared/data)\n");
+        test_skip_part("garments (no ../shared/data)");
         return;
     }
     const char *files[] = {"diffavatar-tshirt.obj", "diffavatar-shirt.obj", "parafashion-skirt.obj",

@@ -18,7 +18,8 @@
 #    (a small tmpfs), for `flatten` and `run`.
 # Readers that are missing (rsvg-convert, /usr/bin/python3 + ezdxf), and the
 # unwritable-folder checks where nothing can stop the writes (root without
-# mount namespaces), skip, printed; with CI=true a skip fails the test.
+# mount namespaces), skip (exit 77 when nothing failed); with CI=true a skip
+# fails the test.
 #
 # SPDX-License-Identifier: GPL-3.0-or-later
 # fontconfig (cairo, pattern.pdf) keeps its caches until exit: not a leak of ours (sanitizer builds).
@@ -26,12 +27,13 @@ export LSAN_OPTIONS="suppressions=$(cd "$(dirname "$0")" && pwd)/lsan-fontconfig
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/../cli/lib.sh"
 
-# A check that cannot run here: printed, and a failure under CI=true (CI must run every check).
+# A check that cannot run here: a skipped part (the test exits 77), and a failure under CI=true (CI must
+# run every check).
 skipped() {
     if [ "${CI:-}" = true ]; then
         fail "$1 skipped, not allowed with CI=true"
     else
-        echo "SKIPPED: $1"
+        skip_part "$1"
     fi
 }
 

@@ -23,8 +23,8 @@
  *    leaves out the second piece of a mirrored pair), garment.glb by the
  *    Khronos validator (zero errors), pattern.svg and marker.svg by
  *    rsvg-convert, both PDFs by pdfinfo and pdftoppm, report.html by an XML
- *    parser. A reader that is not installed skips its check (printed),
- *    except with CI=true, where it fails.
+ *    parser. A reader that is not installed skips its check (the
+ *    test exits 77), except with CI=true, where it fails.
  * One line per garment (pieces, notches, marker, seconds of the run).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later

@@ -5,13 +5,18 @@
  * sketched diagonal on the front is followed within 2 degrees), invariance
  * under a rigid rotation and stability under vertex noise of 0.5 % of the
  * mean edge (mean angle change printed), extra poses changing the field near
- * a bend only (a local elbow bend, and pz_generate's bent pose), singularity indices summing to the Euler characteristic on
- * closed surfaces (torus 0, ellipsoid 2, sphere 2 with no preferred
- * direction at all), and the sketch parser's errors.
+ * a bend only (a local elbow bend, and pz_generate's bent pose), and the
+ * sketch parser's errors. Singularities: the reported ones must be exactly
+ * the vertices whose index, measured here from the arms and the geometry
+ * alone, is not zero (bodice and closed surfaces); a torus of revolution has
+ * none, an ellipsoid a half turn at each of its four umbilics (computed from
+ * its semi-axes; with noise, extra pairs that cancel), a sphere (no
+ * preferred direction at all) only positive ones, at most 8.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "field/field.h"
+#include "core/vec.h"
 #include "test_meshes.h"
 #include "generate/generate.h"
 
@@ -56,6 +61,80 @@ static double mean_edge(const pz_mesh *mesh)
     double length = pz_field_mean_edge_length(mesh, topology);
     pz_topology_free(&topology);
     return length;
+}
+
+/* ---------------------------------------------------------------- singularities, measured here */
+
+/*
+ * The index of the cross at interior vertex v, measured here without the
+ * library's frames: walking the faces round v counter-clockwise, the arm's
+ * angle to each shared edge (about each face's own normal) is kept by the
+ * transport across that edge, so the cross turns by the change of that angle
+ * taken to the nearest quarter turn; the turns plus the angle defect, over
+ * 2 pi, give the index.
+ */
+static double index_at(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field, int32_t v)
+{
+    int32_t h0 = topology->vertex_halfedge[v], h = h0;
+    double turn = 0.0, corner_sum = 0.0;
+    do {
+        int32_t into_v = pz_he_prev(h), twin = topology->twin[into_v];
+        int32_t f = pz_he_face(h), g = pz_he_face(twin), w = pz_he_from(topology, into_v);
+        const double *p_v = mesh->positions + 3 * v;
+        double edge[3], out_edge[3], angle_in[2];
+        pz_vec3_sub(mesh->positions + 3 * w, p_v, edge);
+        pz_vec3_sub(mesh->positions + 3 * pz_he_to(topology, h), p_v, out_edge);
+        corner_sum += acos(pz_vec3_dot(edge, out_edge) / (pz_vec3_norm(edge) * pz_vec3_norm(out_edge)));
+        const int32_t across[2] = {f, g};
+        for (int k = 0; k < 2; ++k) {
+            const int32_t *corners = mesh->faces + 3 * across[k];
+            double side_a[3], side_b[3], normal[3], turned[3];
+            pz_vec3_sub(mesh->positions + 3 * corners[1], mesh->positions + 3 * corners[0], side_a);
+            pz_vec3_sub(mesh->positions + 3 * corners[2], mesh->positions + 3 * corners[0], side_b);
+            pz_vec3_cross(side_a, side_b, normal);
+            pz_vec3_normalize(normal);
+            const double *arm = field->directions + 3 * across[k];
+            pz_vec3_cross(edge, arm, turned);
+            angle_in[k] = atan2(pz_vec3_dot(normal, turned), pz_vec3_dot(edge, arm));
+        }
+        double step = angle_in[1] - angle_in[0];
+        turn += step - TEST_PI / 2.0 * round(step / (TEST_PI / 2.0));
+        h = twin;
+    } while (h != h0);
+    return (turn + 2.0 * TEST_PI - corner_sum) / (2.0 * TEST_PI);
+}
+
+/*
+ * The field's singularities must be exactly the interior vertices whose index
+ * (measured by index_at) is not zero, with that index.
+ */
+static void check_singularities_measured(const pz_mesh *mesh, const pz_field *field, const char *name)
+{
+    pz_topology *topology = test_topology(mesh, &ctx);
+    int32_t found = 0, wrong = 0, listed = 0, not_quarter = 0;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+        if (topology->vertex_halfedge[v] < 0 || topology->vertex_on_boundary[v])
+            continue;
+        double measured = index_at(mesh, topology, field, v);
+        double quarters = round(4.0 * measured);
+        not_quarter += fabs(4.0 * measured - quarters) > 1e-6;
+        while (listed < field->singularity_count && field->singular_vertices[listed] < v)
+            ++wrong, ++listed; /* listed, but not singular here */
+        int is_listed = listed < field->singularity_count && field->singular_vertices[listed] == v;
+        double reported = is_listed ? field->singular_indices[listed++] : 0.0;
+        found += quarters != 0.0;
+        if (fabs(reported - quarters / 4.0) > 1e-12) {
+            if (++wrong <= 5)
+                fprintf(stderr, "%s: vertex %d has index %g, the field reports %g\n", name, (int)v, quarters / 4.0,
+                        reported);
+        }
+    }
+    wrong += field->singularity_count - listed;
+    CHECK(not_quarter == 0, "%s: %d vertices have an index that is no multiple of 1/4", name, (int)not_quarter);
+    CHECK(wrong == 0 && found == field->singularity_count,
+          "%s: %d singularities measured, %d reported, %d vertices disagree", name, (int)found,
+          (int)field->singularity_count, (int)wrong);
+    pz_topology_free(&topology);
 }
 
 /* ---------------------------------------------------------------- cylinder */
@@ -121,6 +200,7 @@ static void test_bodice_boundary(void)
           "bodice: boundary_alignment_deg %.3f", field->boundary_alignment_deg);
     printf("bodice: %d singularities, curvature alignment %.2f deg\n", (int)field->singularity_count,
            field->curvature_alignment_deg);
+    check_singularities_measured(mesh, field, "bodice");
     pz_field_free(&field);
     pz_topology_free(&topology);
     pz_mesh_free(&mesh);
@@ -454,45 +534,90 @@ static pz_mesh *ellipsoid(int columns, int rings, double a, double b, double c)
     return mesh;
 }
 
-static void check_index_sum(pz_mesh *mesh, const char *name)
+
+/* The field of a closed mesh, its singularities checked against index_at. */
+static pz_field *closed_field(const pz_mesh *mesh, const char *name)
 {
     pz_topology_summary summary = test_summary(mesh, &ctx);
     REQUIRE(summary.boundary_loop_count == 0, "%s must be closed", name);
     pz_field *field = field_of(mesh, NULL);
-    double sum = 0.0;
+    check_singularities_measured(mesh, field, name);
+    printf("%s: %d singularities, index sum %g\n", name, (int)field->singularity_count, field->index_sum);
+    return field;
+}
+
+/*
+ * An ellipsoid with semi-axes a > b > c has four umbilics, in the plane of
+ * its longest and shortest axes at x = +-a sqrt((a^2-b^2)/(a^2-c^2)),
+ * z = +-c sqrt((b^2-c^2)/(a^2-c^2)); its lines of curvature turn by half a
+ * turn round each. The curvature-aligned field must put index +1/2 within
+ * `radius` of every umbilic (one +1/2 or two +1/4) and, away from them, only
+ * singularities that cancel (at most `stray` of them: noise makes pairs).
+ */
+static void check_umbilics(const pz_mesh *mesh, const pz_field *field, double a, double b, double c, double radius,
+                           int32_t stray, const char *name)
+{
+    double x = a * sqrt((a * a - b * b) / (a * a - c * c)), z = c * sqrt((b * b - c * c) / (a * a - c * c));
+    const double umbilics[4][3] = {{x, 0.0, z}, {-x, 0.0, z}, {x, 0.0, -z}, {-x, 0.0, -z}};
+    double near[4] = {0.0, 0.0, 0.0, 0.0}, away = 0.0;
+    int32_t away_count = 0;
     for (int32_t k = 0; k < field->singularity_count; ++k) {
-        double quarters = field->singular_indices[k] * 4.0;
-        CHECK(fabs(quarters - round(quarters)) < 1e-9 && quarters != 0.0, "%s: index %g", name,
-              field->singular_indices[k]);
-        sum += field->singular_indices[k];
+        const double *p = mesh->positions + 3 * field->singular_vertices[k];
+        int nearest = -1;
+        for (int u = 0; u < 4; ++u) {
+            double offset[3];
+            pz_vec3_sub(p, umbilics[u], offset);
+            if (pz_vec3_norm(offset) < radius)
+                nearest = u;
+        }
+        if (nearest >= 0)
+            near[nearest] += field->singular_indices[k];
+        else
+            away += field->singular_indices[k], ++away_count;
     }
-    printf("%s: %d singularities, index sum %g, Euler characteristic %d\n", name, (int)field->singularity_count, sum,
-           (int)summary.euler_characteristic);
-    CHECK(fabs(sum - summary.euler_characteristic) < 1e-9 && fabs(field->index_sum - sum) < 1e-9,
-          "%s: singularity indices sum to %g, Euler characteristic %d", name, sum, (int)summary.euler_characteristic);
-    pz_field_free(&field);
+    for (int u = 0; u < 4; ++u)
+        CHECK(fabs(near[u] - 0.5) < 1e-9, "%s: index %g within %g of the umbilic (%.1f, 0, %.1f), not 1/2", name,
+              near[u], radius, umbilics[u][0], umbilics[u][2]);
+    CHECK(fabs(away) < 1e-9 && away_count <= stray, "%s: %d singularities away from the umbilics, index sum %g",
+          name, (int)away_count, away);
 }
 
 static void test_closed_surfaces(void)
 {
+    /* A torus of revolution: the lines of curvature are its meridians and parallels, no singularity at all. */
     pz_mesh *torus = test_grid(48, 24, TEST_GRID_TORUS, 0, &ctx);
     for (int32_t i = 0; i < 3 * torus->vertex_count; ++i)
         torus->positions[i] *= 100.0;
-    check_index_sum(torus, "torus");
+    pz_field *field = closed_field(torus, "torus");
+    CHECK(field->singularity_count == 0, "torus: %d singularities", (int)field->singularity_count);
+    pz_field_free(&field);
     pz_mesh_free(&torus);
+
     pz_mesh *egg = ellipsoid(64, 40, 250.0, 180.0, 120.0);
-    check_index_sum(egg, "ellipsoid");
-    /* Noise breaks every symmetry: the sum must still hold. */
+    field = closed_field(egg, "ellipsoid");
+    check_umbilics(egg, field, 250.0, 180.0, 120.0, 60.0, 0, "ellipsoid");
+    pz_field_free(&field);
+    /* Noise breaks every symmetry: the umbilics keep their half turn; pairs of opposite sign may appear. */
     unsigned state = 99u;
     for (int32_t i = 0; i < 3 * egg->vertex_count; ++i) {
         state = state * 1103515245u + 12345u;
         egg->positions[i] += 2.0 * (((state >> 8) & 0xffff) / 32767.5 - 1.0);
     }
-    check_index_sum(egg, "noisy ellipsoid");
+    field = closed_field(egg, "noisy ellipsoid");
+    check_umbilics(egg, field, 250.0, 180.0, 120.0, 70.0, 4, "noisy ellipsoid");
+    pz_field_free(&field);
     pz_mesh_free(&egg);
-    /* A sphere is umbilic everywhere: no anisotropy, no boundary, the field is seeded at one face. */
+
+    /* A sphere is umbilic everywhere: no anisotropy, no boundary, the field is seeded at one face. A smooth
+     * cross-field on it turns only one way (no negative index) in at most 8 quarter-turn singularities. */
     pz_mesh *sphere = ellipsoid(48, 30, 200.0, 200.0, 200.0);
-    check_index_sum(sphere, "sphere");
+    field = closed_field(sphere, "sphere");
+    int32_t negative = 0;
+    for (int32_t k = 0; k < field->singularity_count; ++k)
+        negative += field->singular_indices[k] < 0.0;
+    CHECK(negative == 0 && field->singularity_count >= 1 && field->singularity_count <= 8,
+          "sphere: %d singularities, %d of negative index", (int)field->singularity_count, (int)negative);
+    pz_field_free(&field);
     pz_mesh_free(&sphere);
 }
 

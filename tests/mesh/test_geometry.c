@@ -233,7 +233,7 @@ static void test_real_meshes(void)
 {
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("skipped the real meshes: PZ_SHARED_DATA is not set\n");
+        test_skip_part("the real meshes: PZ_SHARED_DATA is not set");
         return;
     }
     static const char *const files[] = {"surfaces/hemisphere.obj", "surfaces/face-scan.obj", "seams/skirt_0.obj"};

@@ -228,7 +228,7 @@ static void test_real_meshes(void)
 {
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("skipped the real meshes: PZ_SHARED_DATA is not set\n");
+        test_skip_part("the real meshes: PZ_SHARED_DATA is not set");
         return;
     }
     static const struct {
@@ -244,7 +244,7 @@ static void test_real_meshes(void)
         snprintf(path, sizeof path, "%s/%s", dir, meshes[i].file);
         pz_mesh *mesh = NULL;
         if (pz_mesh_read(path, &mesh, &ctx) != PZ_OK) {
-            printf("skipped %s: %s\n", meshes[i].file, ctx.error);
+            CHECK(0, "cannot read the shared %s: %s", meshes[i].file, ctx.error);
             continue;
         }
         CHECK(pz_mesh_prepare(mesh, path, PZ_REPAIR_NONE, &ctx) == PZ_OK, "%s", ctx.error);

@@ -660,7 +660,9 @@ static void test_shared_tshirt(void)
         return;
     snprintf(path, sizeof path, "%s/garments/diffavatar-tshirt.obj", dir);
     if (stat(path, &info) != 0) {
-        printf("SKIPPED part: %s missing\n", path);
+        char why[4200];
+        snprintf(why, sizeof why, "%s missing", path);
+        test_skip_part(why);
         return;
     }
     pz_mesh *mesh = NULL;
@@ -723,7 +725,9 @@ static void test_shared_skirt(void)
         return;
     snprintf(path, sizeof path, "%s/seams/skirt_0.obj", dir);
     if (stat(path, &info) != 0) {
-        printf("SKIPPED part: %s missing\n", path);
+        char why[4200];
+        snprintf(why, sizeof why, "%s missing", path);
+        test_skip_part(why);
         return;
     }
     pz_mesh *pieces[2] = {NULL, NULL};
@@ -812,6 +816,6 @@ int main(void)
     test_shared_tshirt();
     test_shared_skirt();
     if (!test_shared_data())
-        printf("SKIPPED part: PZ_SHARED_DATA not set (tshirt)\n");
+        test_skip_part("the T-shirt and the skirt's panels (no ../shared/data)");
     return test_finish();
 }

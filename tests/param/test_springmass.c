@@ -8,9 +8,11 @@
  *  - IISERM: on a 5K-face hemisphere patch (60-degree cap), heap relaxation
  *    does at least 5x less work than full relaxation (a deterministic count of
  *    node moves, global iterations counted as one move per vertex: the clock
- *    is bench_springmass's job) and its remaining energy is at most 10% above
- *    full relaxation's; the same with the paper's node sweeps alone in phase
- *    two (local_release_only); multi-path does more work than single path;
+ *    is bench_springmass's job); its phase one leaves more energy, and the
+ *    global release of phase two ends both within 0.1% of each other; with
+ *    the paper's node sweeps alone in phase two (local_release_only) heap
+ *    still does 5x less work and ends at most 10% above full relaxation's
+ *    energy; multi-path does more work than single path;
  *  - orthotropic: changes the pattern, lowers the orthotropic energy (as
  *    pz_metrics_compute measures it) against the isotropic springs, and the
  *    warp follows the grain given (x or y) near the seed;
@@ -33,7 +35,8 @@
  *    hemisphere cap off its axis gets equal legs the same way (independently
  *    7.8% apart);
  *  - two panels (hemisphere halves): both flattened without flips, one
- *    record each, the energy map sums to E(Phi); a panel of two separate
+ *    record each, the energy map, each panel's E(Phi) and the total are those
+ *    of the springs measured on the final pattern; a panel of two separate
  *    triangles is PZ_ERR_DATA with a one-line message and a cleared result.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -201,8 +204,13 @@ static void test_heap_versus_full(void)
     CHECK(pattern->mesh->face_count >= 4800 && pattern->mesh->face_count <= 5500, "patch has %d faces",
           (int)pattern->mesh->face_count);
     CHECK(5 * work(&rh, nv) <= work(&rf, nv), "heap %.0f vs full %.0f node moves", work(&rh, nv), work(&rf, nv));
-    CHECK(rh.final_energy <= 1.1 * rf.final_energy, "remaining energy heap %g full %g", rh.final_energy,
-          rf.final_energy);
+    /* Both end with the same global release to the springs' minimum, which hides phase one: heap's phase one
+     * leaves more energy than full's, and phase two takes both to the same end (within 0.1%). The claim
+     * proper (heap within 10% of full) is checked below with the node sweeps alone in phase two. */
+    CHECK(rh.phase_one_energy > rf.phase_one_energy, "phase one: heap left %g, full %g", rh.phase_one_energy,
+          rf.phase_one_energy);
+    CHECK(fabs(rh.final_energy - rf.final_energy) <= 1e-3 * rf.final_energy, "remaining energy heap %g full %g",
+          rh.final_energy, rf.final_energy);
     CHECK(rm.phase_one_relaxations > rh.phase_one_relaxations, "multi-path %lld vs single %lld",
           rm.phase_one_relaxations, rh.phase_one_relaxations);
     /* the paper's node sweeps alone in phase two (no global release) still meet the claim */
@@ -426,6 +434,53 @@ static void test_negligible_opening(void)
     }
 }
 
+/*
+ * The energies of the result measured here from the pattern alone: a spring
+ * on every edge of the cut mesh, rest length its 3D length, energy
+ * C/2 (|uv_a - uv_b| - rest)^2 at each end (wang2002 Eq. 1, C = 0.5, Sec. 5);
+ * E(Phi) (Eq. 3) sums both ends of every spring. Each vertex of the energy
+ * map, each panel's final_energy and the total must agree with these.
+ */
+static void check_spring_energies(const pz_pattern *pattern, const double *uv, const pz_springmass_result *result,
+                                  const char *what)
+{
+    const double c = 0.5;
+    const pz_mesh *mesh = pattern->mesh;
+    pz_topology *topology = test_topology(mesh, &ctx);
+    double *vertex = calloc((size_t)mesh->vertex_count, sizeof(double));
+    double *panel = calloc((size_t)pattern->panel_count, sizeof(double));
+    REQUIRE(vertex && panel, "out of memory");
+    double total = 0;
+    for (int32_t e = 0; e < topology->edge_count; ++e) {
+        int32_t h = topology->edge_halfedge[2 * e], a = pz_he_from(topology, h), b = pz_he_to(topology, h);
+        const double *pa = mesh->positions + 3 * a, *pb = mesh->positions + 3 * b;
+        double rest = sqrt((pa[0] - pb[0]) * (pa[0] - pb[0]) + (pa[1] - pb[1]) * (pa[1] - pb[1]) +
+                           (pa[2] - pb[2]) * (pa[2] - pb[2]));
+        double stretch = hypot(uv[2 * a] - uv[2 * b], uv[2 * a + 1] - uv[2 * b + 1]) - rest;
+        double end = 0.5 * c * stretch * stretch;
+        vertex[a] += end, vertex[b] += end, total += 2 * end;
+        panel[pattern->face_panel[pz_he_face(h)]] += 2 * end;
+    }
+    int32_t wrong = 0;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        if (fabs(result->vertex_energy[v] - vertex[v]) > 1e-9 * (vertex[v] + total / mesh->vertex_count)) {
+            if (++wrong <= 3)
+                fprintf(stderr, "%s: vertex %d: energy map %.9g, springs %.9g\n", what, (int)v,
+                        result->vertex_energy[v], vertex[v]);
+        }
+    CHECK(result->vertex_count == mesh->vertex_count && wrong == 0, "%s: %d of %d vertices off the springs' energy",
+          what, (int)wrong, (int)mesh->vertex_count);
+    for (int32_t p = 0; p < pattern->panel_count && p < result->panel_count; ++p)
+        CHECK(fabs(result->panels[p].final_energy - panel[p]) <= 1e-9 * panel[p], "%s: panel %d: E %.9g, springs %.9g",
+              what, (int)p, result->panels[p].final_energy, panel[p]);
+    CHECK(fabs(result->final_energy - total) <= 1e-9 * total, "%s: E %.9g, springs %.9g", what, result->final_energy,
+          total);
+    printf("%s: E(Phi) %.6g, as the springs give\n", what, total);
+    free(vertex);
+    free(panel);
+    pz_topology_free(&topology);
+}
+
 /* Two halves of the hemisphere as two panels: both flattened, each with its own record. */
 static void test_two_panels(void)
 {
@@ -444,11 +499,7 @@ static void test_two_panels(void)
         CHECK(m->panels[p].flipped_triangles == 0, "panel %d: %d flipped", p, m->panels[p].flipped_triangles);
         CHECK(fabs(result.panels[p].e_area - m->panels[p].e_area) < 1e-9, "panel %d: Eq. 4 disagrees", p);
     }
-    double sum = 0;
-    for (int32_t v = 0; v < result.vertex_count; ++v)
-        sum += result.vertex_energy[v];
-    CHECK(fabs(sum - result.final_energy) <= 1e-9 * result.final_energy, "energy map sums to %g, not %g", sum,
-          result.final_energy);
+    check_spring_energies(pattern, uv, &result, "halves");
     pz_metrics_free(&m);
     pz_springmass_result_clear(&result);
     free(uv);

@@ -155,7 +155,9 @@ static int garment_case_load(garment_case *g, const char *dir, const char *file,
     g->name = file;
     snprintf(path, sizeof path, "%s/garments/%s", dir, file);
     if (stat(path, &info) != 0) {
-        printf("SKIPPED part: %s missing\n", path);
+        char why[4200];
+        snprintf(why, sizeof why, "%s missing", path);
+        test_skip_part(why);
         return 0;
     }
     REQUIRE_OK(pz_mesh_read(path, &g->mesh, &ctx), ctx);
@@ -477,7 +479,7 @@ int main(void)
     test_procrustes();
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("SKIPPED part: PZ_SHARED_DATA not set or missing (true patterns)\n");
+        test_skip_part("the true patterns (no ../shared/data)");
         return test_finish();
     }
     test_tshirt(dir);

@@ -716,7 +716,7 @@ static void test_shared_garments(void)
 {
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("shared garments: skipped (no ../shared/data)\n");
+        test_skip_part("shared garments: no ../shared/data");
         return;
     }
     const char *files[] = {"diffavatar-tshirt.obj", "diffavatar-shirt.obj", "parafashion-skirt.obj",
@@ -752,7 +752,7 @@ static void test_shared_poses(void)
 {
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("shared poses: skipped (no ../shared/data)\n");
+        test_skip_part("shared poses: no ../shared/data");
         return;
     }
     pz_ctx ctx = quiet_context();
@@ -795,7 +795,7 @@ static void test_shared_scan_auto(void)
 {
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("shared face scan: skipped (no ../shared/data)\n");
+        test_skip_part("shared face scan: no ../shared/data");
         return;
     }
     pz_ctx ctx = quiet_context();

@@ -542,7 +542,7 @@ static void test_shared_skirt(void)
 {
     const char *dir = test_shared_data();
     if (!dir) {
-        printf("shared skirt: skipped (no ../shared/data)\n");
+        test_skip_part("shared skirt (no ../shared/data)");
         return;
     }
     char path[4096];
