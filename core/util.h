@@ -22,7 +22,7 @@ static inline int pz_grow(void **data, size_t *capacity, size_t needed, size_t e
         return 1;
     size_t grown = *capacity ? *capacity : 64;
     while (grown < needed)
-        grown *= 2;
+        grown = grown > SIZE_MAX / 2 ? needed : grown * 2;  /* doubling would wrap to 0 and never end */
     if (grown > SIZE_MAX / element_size)
         return 0;
     void *bigger = realloc(*data, grown * element_size);

@@ -355,6 +355,9 @@ static void test_grow(void)
     size_t old_capacity = capacity;
     CHECK(!pz_grow((void **)&data, &capacity, SIZE_MAX / 2, 16) && data == before && capacity == old_capacity,
           "an overflowing size was accepted");
+    /* A count past 2^63: doubling the capacity would wrap to 0 and loop for ever; it must be refused. */
+    CHECK(!pz_grow((void **)&data, &capacity, SIZE_MAX - 5, 1) && data == before && capacity == old_capacity,
+          "a count past 2^63 was accepted");
     free(data);
 }
 
