@@ -2,15 +2,11 @@
  * cli/cmd_info.c -- `panelize info` and `panelize check`.
  *
  * info describes a mesh and never refuses one that parses: it reads the mesh
- * and its poses, converts to millimetres, validates, and reports what holds.
- * When the mesh is valid the half-edge topology gives components, boundary
- * loops, Euler characteristic and genus. When it is not, topology cannot be
- * built (it needs an edge-manifold, consistently oriented mesh), so info
- * falls back to what needs no manifoldness: components by union-find over the
- * vertices of each face, edges by sorting undirected vertex pairs (both
- * O(F log F)), and the Euler characteristic from those counts; boundary loops
- * and genus are then reported as unknown (JSON null). Only reading errors
- * (missing, unreadable, malformed files, mismatched poses) fail.
+ * and its poses, converts to millimetres and prints pz_mesh_describe's
+ * description (mesh/describe.c: topology when the mesh is valid, what needs
+ * no manifoldness when it is not; unknown figures are JSON null). Only
+ * reading errors (missing, unreadable, malformed files, mismatched poses)
+ * fail.
  *
  * check is the gate every command that needs a valid mesh goes through
  * (pz_cli_load_valid_mesh): it fails with exit 65 and one line naming the
@@ -61,180 +57,16 @@ const char pz_cli_check_usage[] =
 /* Decimals printed for millimetre lengths and areas (micrometre precision). */
 #define LENGTH_DECIMALS 4
 
-/* Everything info reports. Counts are -1 and pointers NULL where unknown. */
+/* Everything info reports: the library's description and what the command knows of the file. */
 typedef struct mesh_report {
     const char *path;
     const pz_mesh *mesh;
     pz_units units;
     int units_guessed;
     int units_plausible;   /* the extent in those units fits a garment (0.2 - 2 m) */
-    pz_validation validation;
-    int manifold;
-    int32_t edge_count;
-    int32_t component_count;
-    int32_t euler_characteristic;
-    int32_t genus;
-    int32_t boundary_loop_count;     /* -1 when topology could not be built */
-    int32_t *loop_vertex_counts;     /* boundary_loop_count, or NULL */
-    double *loop_lengths;            /* boundary_loop_count (mm), or NULL */
-    int area_known;
-    double area_mm2;
-    double bbox_min[3], bbox_max[3];
-    double read_ms, validate_ms, topology_ms, total_ms;
+    pz_mesh_description d; /* pz_mesh_describe */
+    double read_ms, total_ms;
 } mesh_report;
-
-static void report_clear(mesh_report *report)
-{
-    pz_validation_clear(&report->validation);
-    free(report->loop_vertex_counts);
-    free(report->loop_lengths);
-    report->loop_vertex_counts = NULL;
-    report->loop_lengths = NULL;
-}
-
-/* ---------------------------------------------------------------- robust counts for invalid meshes */
-
-static int vertex_in_range(const pz_mesh *mesh, int32_t v)
-{
-    return v >= 0 && v < mesh->vertex_count;
-}
-
-/* Vertices that some face references through an in-range index. */
-static pz_status count_referenced(const pz_mesh *mesh, int32_t *referenced_count, pz_ctx *ctx)
-{
-    uint8_t *referenced = calloc((size_t)mesh->vertex_count + 1, 1);
-    if (!referenced)
-        return pz_error(ctx, PZ_ERR_NOMEM, "out of memory counting vertices");
-    for (int32_t c = 0; c < 3 * mesh->face_count; ++c)
-        if (vertex_in_range(mesh, mesh->faces[c]))
-            referenced[mesh->faces[c]] = 1;
-    int32_t total = 0;
-    for (int32_t v = 0; v < mesh->vertex_count; ++v)
-        total += referenced[v];
-    free(referenced);
-    *referenced_count = total;
-    return PZ_OK;
-}
-
-static int compare_u64(const void *a, const void *b)
-{
-    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
-    return (x > y) - (x < y);
-}
-
-/* Distinct undirected edges between two different in-range vertices. */
-static pz_status count_edges(const pz_mesh *mesh, int32_t *edge_count, pz_ctx *ctx)
-{
-    uint64_t *keys = malloc(((size_t)mesh->face_count * 3 + 1) * sizeof *keys);
-    if (!keys)
-        return pz_error(ctx, PZ_ERR_NOMEM, "out of memory counting edges");
-    size_t key_count = 0;
-    for (int32_t f = 0; f < mesh->face_count; ++f)
-        for (int k = 0; k < 3; ++k) {
-            int32_t a = mesh->faces[3 * f + k], b = mesh->faces[3 * f + (k + 1) % 3];
-            if (a == b || !vertex_in_range(mesh, a) || !vertex_in_range(mesh, b))
-                continue;
-            uint32_t low = (uint32_t)(a < b ? a : b), high = (uint32_t)(a < b ? b : a);
-            keys[key_count++] = (uint64_t)low << 32 | high;
-        }
-    qsort(keys, key_count, sizeof *keys, compare_u64);
-    int32_t distinct = 0;
-    for (size_t i = 0; i < key_count; ++i)
-        if (i == 0 || keys[i] != keys[i - 1])
-            ++distinct;
-    free(keys);
-    *edge_count = distinct;
-    return PZ_OK;
-}
-
-/* ---------------------------------------------------------------- analysis */
-
-static double loop_length(const pz_mesh *mesh, const int32_t *vertices, int32_t count)
-{
-    double length = 0.0;
-    for (int32_t i = 0; i < count; ++i) {
-        const double *a = mesh->positions + 3 * (size_t)vertices[i];
-        const double *b = mesh->positions + 3 * (size_t)vertices[(i + 1) % count];
-        length += sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-    }
-    return length;
-}
-
-/* Topology of a valid mesh: components, edges, Euler, genus and boundary loops. */
-static pz_status analyse_topology(mesh_report *report, pz_ctx *ctx)
-{
-    pz_topology *topology = NULL;
-    pz_loops *loops = NULL;
-    pz_topology_summary summary;
-    pz_status status = pz_topology_build(report->mesh, &topology, ctx);
-    if (status == PZ_OK)
-        status = pz_topology_summarize(topology, &summary, ctx);
-    if (status == PZ_OK)
-        status = pz_topology_boundary_loops(topology, &loops, ctx);
-    if (status == PZ_OK) {
-        int32_t count = loops->loop_count;
-        report->loop_vertex_counts = malloc(((size_t)count + 1) * sizeof *report->loop_vertex_counts);
-        report->loop_lengths = malloc(((size_t)count + 1) * sizeof *report->loop_lengths);
-        if (!report->loop_vertex_counts || !report->loop_lengths)
-            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", report->path);
-    }
-    if (status == PZ_OK) {
-        for (int32_t i = 0; i < loops->loop_count; ++i) {
-            int32_t begin = loops->loop_offsets[i], end = loops->loop_offsets[i + 1];
-            report->loop_vertex_counts[i] = end - begin;
-            report->loop_lengths[i] = loop_length(report->mesh, loops->loop_vertices + begin, end - begin);
-        }
-        report->boundary_loop_count = loops->loop_count;
-        report->edge_count = summary.edge_count;
-        report->component_count = summary.component_count;
-        report->euler_characteristic = summary.euler_characteristic;
-        report->genus = summary.genus;
-    }
-    pz_loops_free(&loops);
-    pz_topology_free(&topology);
-    return status;
-}
-
-/* What can be counted without manifoldness (see the file comment). */
-static pz_status analyse_robustly(mesh_report *report, pz_ctx *ctx)
-{
-    int32_t referenced_count = 0;
-    int32_t component_count = pz_mesh_face_components(report->mesh, NULL, ctx);
-    if (component_count < 0)
-        return (pz_status)component_count;
-    report->component_count = component_count;
-    pz_status status = count_referenced(report->mesh, &referenced_count, ctx);
-    if (status == PZ_OK)
-        status = count_edges(report->mesh, &report->edge_count, ctx);
-    if (status == PZ_OK)
-        report->euler_characteristic = referenced_count - report->edge_count + report->mesh->face_count;
-    return status;
-}
-
-static pz_status analyse(mesh_report *report, pz_ctx *ctx)
-{
-    const pz_mesh *mesh = report->mesh;
-    double start = pz_seconds();
-    pz_status status = pz_mesh_validate(mesh, &report->validation, ctx);
-    if (status != PZ_OK)
-        return status;
-    report->manifold = pz_validation_ok(&report->validation);
-    double validated = pz_seconds();
-    report->validate_ms = pz_cli_elapsed_ms(start, validated);
-
-    report->boundary_loop_count = -1;
-    report->genus = -1;
-    status = report->manifold ? analyse_topology(report, ctx) : analyse_robustly(report, ctx);
-    if (status != PZ_OK)
-        return status;
-    report->topology_ms = pz_cli_elapsed_ms(validated, pz_seconds());
-
-    /* Out-of-range corners would make the geometry read outside the arrays. */
-    report->area_known = report->validation.bad_indices == 0;
-    report->area_mm2 = report->area_known ? pz_geom_total_area(mesh) : 0.0;
-    pz_mesh_bbox(mesh, report->bbox_min, report->bbox_max);
-    return PZ_OK;
-}
 
 /* ---------------------------------------------------------------- output */
 
@@ -252,39 +84,39 @@ static void print_text(const mesh_report *report)
     printf("file:                 %s\n", report->path);
     printf("vertices:             %d\n", (int)mesh->vertex_count);
     printf("faces:                %d\n", (int)mesh->face_count);
-    printf("edges:                %d\n", (int)report->edge_count);
-    printf("components:           %d\n", (int)report->component_count);
-    if (report->boundary_loop_count < 0) {
+    printf("edges:                %d\n", (int)report->d.edge_count);
+    printf("components:           %d\n", (int)report->d.component_count);
+    if (report->d.boundary_loop_count < 0) {
         printf("boundary loops:       unknown (mesh is not a valid manifold)\n");
     } else {
-        printf("boundary loops:       %d\n", (int)report->boundary_loop_count);
-        for (int32_t i = 0; i < report->boundary_loop_count && i < TEXT_MAX_LOOPS; ++i)
-            printf("  loop %-3d            %d vertices, %.1f mm\n", (int)i, (int)report->loop_vertex_counts[i],
-                   report->loop_lengths[i]);
-        if (report->boundary_loop_count > TEXT_MAX_LOOPS)
-            printf("  ... and %d more\n", (int)(report->boundary_loop_count - TEXT_MAX_LOOPS));
+        printf("boundary loops:       %d\n", (int)report->d.boundary_loop_count);
+        for (int32_t i = 0; i < report->d.boundary_loop_count && i < TEXT_MAX_LOOPS; ++i)
+            printf("  loop %-3d            %d vertices, %.1f mm\n", (int)i, (int)report->d.loop_vertex_counts[i],
+                   report->d.loop_lengths[i]);
+        if (report->d.boundary_loop_count > TEXT_MAX_LOOPS)
+            printf("  ... and %d more\n", (int)(report->d.boundary_loop_count - TEXT_MAX_LOOPS));
     }
-    printf("euler characteristic: %d\n", (int)report->euler_characteristic);
-    if (report->genus < 0)
+    printf("euler characteristic: %d\n", (int)report->d.euler_characteristic);
+    if (report->d.genus < 0)
         printf("genus:                unknown\n");
     else
-        printf("genus:                %d\n", (int)report->genus);
-    printf("manifold:             %s\n", report->manifold ? "yes" : "no");
-    for (int32_t i = 0; i < report->validation.problem_count; ++i)
-        printf("  problem:            %s\n", report->validation.problems[i]);
+        printf("genus:                %d\n", (int)report->d.genus);
+    printf("manifold:             %s\n", report->d.manifold ? "yes" : "no");
+    for (int32_t i = 0; i < report->d.validation.problem_count; ++i)
+        printf("  problem:            %s\n", report->d.validation.problems[i]);
     printf("units:                %s (%s)\n", pz_units_str(report->units),
            !report->units_guessed ? "given"
            : report->units_plausible ? "guessed"
                                      : "guessed, but the size fits no garment: give --units");
     double size[3];
     for (int k = 0; k < 3; ++k)
-        size[k] = report->bbox_max[k] - report->bbox_min[k];
+        size[k] = report->d.bbox_max[k] - report->d.bbox_min[k];
     printf("bounding box (mm):\n");
-    print_vec3("min", report->bbox_min);
-    print_vec3("max", report->bbox_max);
+    print_vec3("min", report->d.bbox_min);
+    print_vec3("max", report->d.bbox_max);
     print_vec3("size", size);
-    if (report->area_known)
-        printf("area:                 %.1f mm^2 (%.4f m^2)\n", report->area_mm2, report->area_mm2 * 1e-6);
+    if (report->d.area_known)
+        printf("area:                 %.1f mm^2 (%.4f m^2)\n", report->d.area_mm2, report->d.area_mm2 * 1e-6);
     else
         printf("area:                 unknown (faces with bad indices)\n");
     if (mesh->uv_count > 0)
@@ -299,7 +131,7 @@ static void print_text(const mesh_report *report)
     printf("%s\n", mesh->label_count > 0 ? ")" : "");
     printf("poses:                %d\n", (int)mesh->pose_count);
     printf("timings (ms):         read %.1f, validate %.1f, topology %.1f, total %.1f\n", report->read_ms,
-           report->validate_ms, report->topology_ms, report->total_ms);
+           report->d.validate_ms, report->d.topology_ms, report->total_ms);
 }
 
 /* A count, or null when it is unknown (negative). */
@@ -310,12 +142,12 @@ static cJSON *json_count_or_null(int32_t count)
 
 static cJSON *json_loops(const mesh_report *report, int lengths)
 {
-    if (report->boundary_loop_count < 0)
+    if (report->d.boundary_loop_count < 0)
         return cJSON_CreateNull();
     cJSON *array = cJSON_CreateArray();
-    for (int32_t i = 0; array && i < report->boundary_loop_count; ++i) {
-        double value = lengths ? pz_cli_round(report->loop_lengths[i], LENGTH_DECIMALS)
-                               : report->loop_vertex_counts[i];
+    for (int32_t i = 0; array && i < report->d.boundary_loop_count; ++i) {
+        double value = lengths ? pz_cli_round(report->d.loop_lengths[i], LENGTH_DECIMALS)
+                               : report->d.loop_vertex_counts[i];
         if (!cJSON_AddItemToArray(array, cJSON_CreateNumber(value))) {
             cJSON_Delete(array);
             return NULL;
@@ -349,10 +181,10 @@ static cJSON *json_bbox(const mesh_report *report)
 {
     double size[3];
     for (int k = 0; k < 3; ++k)
-        size[k] = report->bbox_max[k] - report->bbox_min[k];
+        size[k] = report->d.bbox_max[k] - report->d.bbox_min[k];
     cJSON *bbox = cJSON_CreateObject();
-    if (bbox && (!cJSON_AddItemToObject(bbox, "min", pz_cli_json_vec3(report->bbox_min, LENGTH_DECIMALS)) ||
-                 !cJSON_AddItemToObject(bbox, "max", pz_cli_json_vec3(report->bbox_max, LENGTH_DECIMALS)) ||
+    if (bbox && (!cJSON_AddItemToObject(bbox, "min", pz_cli_json_vec3(report->d.bbox_min, LENGTH_DECIMALS)) ||
+                 !cJSON_AddItemToObject(bbox, "max", pz_cli_json_vec3(report->d.bbox_max, LENGTH_DECIMALS)) ||
                  !cJSON_AddItemToObject(bbox, "size", pz_cli_json_vec3(size, LENGTH_DECIMALS)))) {
         cJSON_Delete(bbox);
         return NULL;
@@ -364,8 +196,8 @@ static cJSON *json_timings(const mesh_report *report)
 {
     cJSON *timings = cJSON_CreateObject();
     if (timings && (!cJSON_AddNumberToObject(timings, "read", report->read_ms) ||
-                    !cJSON_AddNumberToObject(timings, "validate", report->validate_ms) ||
-                    !cJSON_AddNumberToObject(timings, "topology", report->topology_ms) ||
+                    !cJSON_AddNumberToObject(timings, "validate", pz_cli_round(report->d.validate_ms, 3)) ||
+                    !cJSON_AddNumberToObject(timings, "topology", pz_cli_round(report->d.topology_ms, 3)) ||
                     !cJSON_AddNumberToObject(timings, "total", report->total_ms))) {
         cJSON_Delete(timings);
         return NULL;
@@ -381,22 +213,22 @@ static pz_status print_json(const mesh_report *report, pz_ctx *ctx)
     failed = failed || !cJSON_AddStringToObject(root, "file", report->path);
     failed = failed || !cJSON_AddNumberToObject(root, "vertices", mesh->vertex_count);
     failed = failed || !cJSON_AddNumberToObject(root, "faces", mesh->face_count);
-    failed = failed || !cJSON_AddNumberToObject(root, "edges", report->edge_count);
-    failed = failed || !cJSON_AddNumberToObject(root, "components", report->component_count);
-    failed = failed || !cJSON_AddItemToObject(root, "boundary_loops", json_count_or_null(report->boundary_loop_count));
+    failed = failed || !cJSON_AddNumberToObject(root, "edges", report->d.edge_count);
+    failed = failed || !cJSON_AddNumberToObject(root, "components", report->d.component_count);
+    failed = failed || !cJSON_AddItemToObject(root, "boundary_loops", json_count_or_null(report->d.boundary_loop_count));
     failed = failed || !cJSON_AddItemToObject(root, "boundary_loop_lengths_mm", json_loops(report, 1));
     failed = failed || !cJSON_AddItemToObject(root, "boundary_loop_vertices", json_loops(report, 0));
-    failed = failed || !cJSON_AddItemToObject(root, "genus", json_count_or_null(report->genus));
-    failed = failed || !cJSON_AddNumberToObject(root, "euler_characteristic", report->euler_characteristic);
-    failed = failed || !cJSON_AddBoolToObject(root, "manifold", report->manifold);
-    failed = failed || !cJSON_AddItemToObject(root, "problems", json_problems(&report->validation));
+    failed = failed || !cJSON_AddItemToObject(root, "genus", json_count_or_null(report->d.genus));
+    failed = failed || !cJSON_AddNumberToObject(root, "euler_characteristic", report->d.euler_characteristic);
+    failed = failed || !cJSON_AddBoolToObject(root, "manifold", report->d.manifold);
+    failed = failed || !cJSON_AddItemToObject(root, "problems", json_problems(&report->d.validation));
     failed = failed || !cJSON_AddNumberToObject(root, "poses", mesh->pose_count);
     failed = failed || !cJSON_AddStringToObject(root, "units", pz_units_str(report->units));
     failed = failed || !cJSON_AddBoolToObject(root, "units_guessed", report->units_guessed);
     failed = failed || !cJSON_AddBoolToObject(root, "units_plausible", report->units_plausible);
     failed = failed || !cJSON_AddItemToObject(root, "bbox_mm", json_bbox(report));
-    failed = failed || !cJSON_AddItemToObject(root, "area_mm2", report->area_known
-                                                                    ? cJSON_CreateNumber(pz_cli_round(report->area_mm2, LENGTH_DECIMALS))
+    failed = failed || !cJSON_AddItemToObject(root, "area_mm2", report->d.area_known
+                                                                    ? cJSON_CreateNumber(pz_cli_round(report->d.area_mm2, LENGTH_DECIMALS))
                                                                     : cJSON_CreateNull());
     failed = failed || !cJSON_AddNumberToObject(root, "uvs", mesh->uv_count);
     failed = failed || !cJSON_AddItemToObject(root, "labels", json_labels(mesh));
@@ -424,13 +256,13 @@ pz_status pz_cli_info(const pz_cli_args *args, pz_ctx *ctx)
     report.mesh = mesh;
     report.read_ms = pz_cli_elapsed_ms(start, pz_seconds());
 
-    status = analyse(&report, ctx);
+    status = pz_mesh_describe(mesh, &report.d, ctx);
     report.total_ms = pz_cli_elapsed_ms(start, pz_seconds());
     if (status == PZ_OK)
         status = args->json ? print_json(&report, ctx) : (print_text(&report), PZ_OK);
     if (status == PZ_OK)
         pz_cli_warn_units(args, report.path, mesh, report.units, ctx);
-    report_clear(&report);
+    pz_mesh_description_clear(&report.d);
     pz_mesh_free(&mesh);
     return status;
 }

@@ -279,6 +279,33 @@ typedef struct pz_topology_summary {
 
 pz_status pz_topology_summarize(const pz_topology *topology, pz_topology_summary *out, pz_ctx *ctx);
 
+/** What a mesh is, valid or not (`panelize info`): counts that are not known are -1. */
+typedef struct pz_mesh_description {
+    pz_validation validation;
+    int manifold;                    /* pz_validation_ok */
+    int32_t edge_count;
+    int32_t component_count;
+    int32_t euler_characteristic;
+    int32_t genus;                   /* -1 when the mesh is not a valid manifold */
+    int32_t boundary_loop_count;     /* -1 when the mesh is not a valid manifold */
+    int32_t *loop_vertex_counts;     /* boundary_loop_count, or NULL */
+    double *loop_lengths;            /* boundary_loop_count, mm, or NULL */
+    int area_known;                  /* 0 when faces have out-of-range indices */
+    double area_mm2;
+    double bbox_min[3], bbox_max[3];
+    double validate_ms, topology_ms;
+} pz_mesh_description;
+
+/**
+ * Describes any mesh that parses: validation, then the half-edge topology
+ * (components, boundary loops and their lengths, Euler characteristic, genus)
+ * when the mesh is a valid manifold, or the counts that need no
+ * manifoldness (components, edges, Euler characteristic) when it is not;
+ * area and bounding box. O(F log F). Free with pz_mesh_description_clear.
+ */
+pz_status pz_mesh_describe(const pz_mesh *mesh, pz_mesh_description *out, pz_ctx *ctx);
+void pz_mesh_description_clear(pz_mesh_description *description);
+
 /* ------------------------------------------------------------------------ */
 /* Geometry (rest pose unless a positions array is passed)                   */
 /* ------------------------------------------------------------------------ */
