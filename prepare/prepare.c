@@ -211,7 +211,12 @@ pz_status prep_remesh_all(const pz_mesh *work, const prep_edge_list *seams, cons
                           const char *why, pz_prepare_result *result, prep_step_state *state, pz_ctx *ctx)
 {
     pz_cgal_surface remeshed = {0};
-    pz_status status = prep_decimate_and_remesh(work, seams, name, plan, why, &result->mesh, &remeshed, state, ctx);
+    /* Cancellation is checked between the steps: each is under a second on a 50K-face garment. */
+    pz_status status = pz_check_cancel(ctx, name);
+    if (!status)
+        status = prep_decimate_and_remesh(work, seams, name, plan, why, &result->mesh, &remeshed, state, ctx);
+    if (!status)
+        status = pz_check_cancel(ctx, name);
     if (!status)
         status = prep_carry_and_measure(work, result->mesh, state, ctx);
     if (!status)
@@ -249,6 +254,8 @@ static pz_status run_prepare(const pz_mesh *mesh, const pz_prepare_options *opti
     pz_status status = pz_mesh_copy(mesh, &work, ctx);
     if (!status)
         status = clean(work, name, &plan, options->keep, &seams, &state, ctx);
+    if (!status)
+        status = pz_check_cancel(ctx, name);
     if (!status) {
         double lo[3], hi[3];
         pz_mesh_bbox(work, lo, hi);

@@ -405,6 +405,11 @@ pz_status prep_decimate_and_remesh(const pz_mesh *work, const prep_edge_list *se
         prep_step_done(state, PZ_PREPARE_DECIMATE, 0, started, "not needed: %d faces, at most %.0f wanted",
                        (int)work->face_count, DECIMATE_ABOVE * expected);
     }
+    if ((status = pz_check_cancel(ctx, name))) {
+        pz_cgal_surface_clear(&thinned);
+        pz_cgal_surface_clear(&decimated);
+        return status;
+    }
     started = pz_seconds();
     status = find_corners(&source, edge, OUTLINE_TOLERANCE * report->hausdorff_bound, ctx);
     if (!status)
