@@ -52,6 +52,7 @@
  */
 #include "param/pattern_internal.h"
 #include "core/util.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -114,12 +115,6 @@ void pz_correspondences_clear(pz_correspondences *correspondences)
 pz_status pattern_no_memory(pattern_builder *b, pz_ctx *ctx)
 {
     return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory building the pattern", b->path);
-}
-
-static double distance3(const double *a, const double *b)
-{
-    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
-    return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
 /* CSR of the edges at each garment vertex, for looking edges up by their ends. */
@@ -433,7 +428,7 @@ static int32_t nearest_loop_vertex(path_search *s, const int32_t *panel_vertices
         for (int32_t i = s->adjacency_offsets[v]; i < s->adjacency_offsets[v + 1]; ++i) {
             int32_t e = s->adjacency[i], h = ct->edge_halfedge[2 * e];
             int32_t w = pz_he_from(ct, h) == v ? pz_he_to(ct, h) : pz_he_from(ct, h);
-            double d = item.distance + distance3(s->positions + 3 * (size_t)v, s->positions + 3 * (size_t)w);
+            double d = item.distance + pz_vec3_distance(s->positions + 3 * (size_t)v, s->positions + 3 * (size_t)w);
             if (d < s->distance[w]) {
                 s->distance[w] = d;
                 s->previous_edge[w] = e;

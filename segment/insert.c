@@ -19,6 +19,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "segment/internal.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -104,7 +105,7 @@ static double plane_side(const seg_layout *layout, const int32_t *vertices, int3
     double side = 0;
     for (int32_t j = 0; j < n; ++j) {
         const double *p = layout->mesh->positions + 3 * vertices[j];
-        side += s->normal[0] * p[0] + s->normal[1] * p[1] + s->normal[2] * p[2] - s->offset;
+        side += pz_vec3_dot(s->normal, p) - s->offset;
     }
     return side / n;
 }
@@ -305,9 +306,9 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
 uint8_t seg_closest_arm(const pz_trace_graph *graph, int32_t v, const double d[3])
 {
     const double *n = graph->vertex_normals + 3 * v, *a = graph->vertex_arms + 3 * v;
-    double b[3] = {n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0]};
-    double along = d[0] * a[0] + d[1] * a[1] + d[2] * a[2];
-    double across = d[0] * b[0] + d[1] * b[1] + d[2] * b[2];
+    double b[3];
+    pz_vec3_cross(n, a, b);
+    double along = pz_vec3_dot(d, a), across = pz_vec3_dot(d, b);
     if (fabs(along) >= fabs(across))
         return along >= 0 ? 0 : 2;
     return across >= 0 ? 1 : 3;
@@ -317,7 +318,8 @@ uint8_t seg_closest_arm(const pz_trace_graph *graph, int32_t v, const double d[3
 static void arm_direction(const pz_trace_graph *graph, int32_t v, int k, double d[3])
 {
     const double *n = graph->vertex_normals + 3 * v, *a = graph->vertex_arms + 3 * v;
-    double b[3] = {n[1] * a[2] - n[2] * a[1], n[2] * a[0] - n[0] * a[2], n[0] * a[1] - n[1] * a[0]};
+    double b[3];
+    pz_vec3_cross(n, a, b);
     double ca = k == 0 ? 1 : k == 2 ? -1 : 0, cb = k == 1 ? 1 : k == 3 ? -1 : 0;
     for (int i = 0; i < 3; ++i)
         d[i] = ca * a[i] + cb * b[i];

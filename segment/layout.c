@@ -27,6 +27,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "segment/internal.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <omp.h>
@@ -218,7 +219,7 @@ static double symmetry_residual(const seg_layout *layout)
     int32_t stride = n > RESIDUAL_SAMPLES ? (n + RESIDUAL_SAMPLES - 1) / RESIDUAL_SAMPLES : 1, samples = 0;
     for (int32_t i = 0; i < n; i += stride, ++samples) {
         const double *p = mid + 3 * i;
-        double d = s->normal[0] * p[0] + s->normal[1] * p[1] + s->normal[2] * p[2] - s->offset;
+        double d = pz_vec3_dot(s->normal, p) - s->offset;
         double q[3] = {p[0] - 2 * d * s->normal[0], p[1] - 2 * d * s->normal[1], p[2] - 2 * d * s->normal[2]};
         double best = INFINITY;
         for (int32_t j = 0; j < n; ++j) {
@@ -369,8 +370,7 @@ static pz_status check_options(const pz_segment_options *options, pz_ctx *ctx)
     if (!(options->max_strain >= 0) || options->max_corners < 0 || options->max_candidates < 0 ||
         options->max_depth < 0 || options->threads < 0)
         return pz_error(ctx, PZ_ERR_USAGE, "segment: negative strain, corner, candidate, depth or thread option");
-    double g = sqrt(options->grain[0] * options->grain[0] + options->grain[1] * options->grain[1] +
-                    options->grain[2] * options->grain[2]);
+    double g = pz_vec3_norm(options->grain);
     if (!(g > 0))
         return pz_error(ctx, PZ_ERR_USAGE, "segment: the grain axis is zero");
     return PZ_OK;
@@ -387,8 +387,7 @@ static pz_status layout_init(seg_layout *layout, const pz_mesh *mesh, const pz_t
     layout->goals.max_corners = options->max_corners > 0 ? options->max_corners : DEFAULT_MAX_CORNERS;
     layout->goals.max_strain = options->max_strain;
     layout->accept_strain = (1 - options->strain_margin) * options->max_strain;
-    double g = sqrt(options->grain[0] * options->grain[0] + options->grain[1] * options->grain[1] +
-                    options->grain[2] * options->grain[2]);
+    double g = pz_vec3_norm(options->grain);
     for (int k = 0; k < 3; ++k)
         layout->goals.grain[k] = options->grain[k] / g;
     layout->threads = options->threads > 0 ? options->threads : omp_get_max_threads();
