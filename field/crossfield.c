@@ -56,7 +56,9 @@
  * Cost: O(F) assembly, the sparse factorisation (O(F^1.5)-ish fill for
  * surface meshes), O(F) singularities. Memory: ~10 doubles per face plus the
  * factor. Failure: PZ_ERR_USAGE (options), PZ_ERR_NOMEM, PZ_ERR_INTERNAL
- * (CHOLMOD failed); nothing leaks and *out stays NULL.
+ * (CHOLMOD failed), PZ_ERR_CANCELLED (pz_ctx.cancel, checked between the
+ * steps: per pose, assembly, analysis, factorisation, solve, singularities);
+ * nothing leaks and *out stays NULL.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -176,7 +178,9 @@ static pz_status curvature_targets(const pz_mesh *mesh, const pz_topology *topol
     for (int32_t p = 0; p < pose_total; ++p) {
         const double *positions = p == 0 ? mesh->positions : mesh->poses + (size_t)(p - 1) * mesh->vertex_count * 3;
         pz_curvature *curvature = NULL;
-        pz_status status = pz_curvature_compute(mesh, topology, positions, options->scale_count, &curvature, ctx);
+        pz_status status = pz_check_cancel(ctx, "field");
+        if (!status)
+            status = pz_curvature_compute(mesh, topology, positions, options->scale_count, &curvature, ctx);
         if (status)
             return status;
         for (int32_t f = 0; f < mesh->face_count; ++f) {
@@ -348,9 +352,13 @@ static pz_status solve_field(const solve_input *in, pz_ctx *ctx)
             assemble_edge(in, index, pz_he_face(h), pz_he_face(t), transport_angle(mesh, in->topology, in->fr, h),
                           triplets, b);
     }
+    if ((status = pz_check_cancel(ctx, "field")))
+        goto done;
     matrix = cholmod_triplet_to_sparse(triplets, triplets->nnz, &common);
     if (matrix)
         factor = cholmod_analyze(matrix, &common);
+    if (factor && (status = pz_check_cancel(ctx, "field")))
+        goto done;
     if (factor)
         cholmod_factorize(matrix, factor, &common);
     if (!matrix || !factor || common.status != CHOLMOD_OK || factor->minor < factor->n) {
@@ -359,6 +367,8 @@ static pz_status solve_field(const solve_input *in, pz_ctx *ctx)
                      : pz_error(ctx, PZ_ERR_INTERNAL, "field: factorisation failed (CHOLMOD status %d)", common.status);
         goto done;
     }
+    if ((status = pz_check_cancel(ctx, "field")))
+        goto done;
     solution = cholmod_solve(CHOLMOD_A, factor, rhs, &common);
     if (!solution || common.status != CHOLMOD_OK) {
         status = pz_error(ctx, PZ_ERR_INTERNAL, "field: solve failed (CHOLMOD status %d)", common.status);
@@ -572,7 +582,9 @@ pz_status pz_field_compute(const pz_mesh *mesh, const pz_topology *topology, con
     double *target_re = malloc(((size_t)n + 1) * sizeof(double)), *target_im = malloc(((size_t)n + 1) * sizeof(double));
     double *u_re = malloc(((size_t)n + 1) * sizeof(double)), *u_im = malloc(((size_t)n + 1) * sizeof(double));
     double *align_weight = malloc(((size_t)n + 1) * sizeof(double));
-    pz_status status = PZ_OK;
+    pz_status status = pz_check_cancel(ctx, "field");
+    if (status)
+        goto done;
     if (!field || !frames_build(mesh, &fr) || !target_re || !target_im || !u_re || !u_im || !align_weight) {
         status = pz_error(ctx, PZ_ERR_NOMEM, "field: out of memory for %d faces", (int)n);
         goto done;
@@ -584,6 +596,8 @@ pz_status pz_field_compute(const pz_mesh *mesh, const pz_topology *topology, con
     if ((status = curvature_targets(mesh, topology, &fr, &opts, target_re, target_im, field, ctx)))
         goto done;
     double curvature_end = pz_seconds();
+    if ((status = pz_check_cancel(ctx, "field")))
+        goto done;
     if (opts.sketch && (status = apply_sketch(mesh, &fr, opts.sketch, field, ctx)))
         goto done;
     double sketch_end = pz_seconds();
@@ -605,6 +619,8 @@ pz_status pz_field_compute(const pz_mesh *mesh, const pz_topology *topology, con
     for (int32_t f = 0; f < n; ++f)
         frame_direction(&fr, f, 0.25 * atan2(u_im[f], u_re[f]), field->directions + 3 * (size_t)f);
     double solve_end = pz_seconds();
+    if ((status = pz_check_cancel(ctx, "field")))
+        goto done;
     if ((status = find_singularities(mesh, topology, &fr, u_re, u_im, field, ctx)))
         goto done;
     alignment_figures(mesh, topology, field);

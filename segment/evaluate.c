@@ -142,17 +142,18 @@ void pz_segment_cache_free(pz_segment_cache **cache)
     *cache = NULL;
 }
 
-/* One evaluation; a failed flattening (not out of memory) counts as a panel that is not injective. */
-static pz_status evaluate_one(const seg_layout *layout, int32_t p, seg_goal_scratch *scratch, pz_goal_result *out)
+/* One evaluation; a failed flattening (not out of memory, not cancelled) counts as a panel that is not
+ * injective. The flattening sees the caller's cancel flag (`parent`: read only, this runs in parallel). */
+static pz_status evaluate_one(const seg_layout *layout, int32_t p, seg_goal_scratch *scratch, pz_goal_result *out,
+                              const pz_ctx *parent)
 {
     pz_ctx local;
-    pz_ctx_init(&local);
-    local.quiet = 1;
+    pz_ctx_quiet(parent, &local);
     const int32_t *faces = layout->panel_faces + layout->panel_offsets[p];
     int32_t count = layout->panel_offsets[p + 1] - layout->panel_offsets[p];
     pz_status status = seg_goals(layout->mesh, layout->topology, layout->edge_cut, layout->face_panel, faces, count,
                                  &layout->goals, scratch, out, &local);
-    if (status && status != PZ_ERR_NOMEM) {
+    if (status && status != PZ_ERR_NOMEM && status != PZ_ERR_CANCELLED) {
         memset(out, 0, sizeof *out);
         out->failures = PZ_GOAL_NOT_INJECTIVE;
         out->max_abs_strain = -1;
@@ -165,6 +166,9 @@ static pz_status evaluate_one(const seg_layout *layout, int32_t p, seg_goal_scra
 
 pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *ctx)
 {
+    pz_status cancelled = pz_check_cancel(ctx, "segment");
+    if (cancelled)
+        return cancelled;
     int32_t panels = layout->panel_count, misses = 0;
     int32_t *miss = malloc(((size_t)panels + 1) * sizeof(int32_t));
     uint64_t *keys = malloc(((size_t)panels + 1) * sizeof(uint64_t));
@@ -203,15 +207,23 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
     for (int32_t i = 0; i < misses; ++i) {
         if (status)
             continue;
+        /* Once cancelled, the evaluations left are skipped (the flag is only read here; the error is
+         * recorded after the parallel loop). */
+        if (pz_cancelled(ctx)) {
+            statuses[i] = PZ_ERR_CANCELLED;
+            continue;
+        }
         /* Flattening and metrics open parallel regions of their own; inside an inactive region (one
          * thread or one miss) they would wake every core for each small panel. This sets the
          * thread count of this implicit task only. */
         omp_set_num_threads(1);
         statuses[i] = evaluate_one(layout, miss[i], layout->goal_scratch[omp_get_thread_num()],
-                                   layout->panel_goals + miss[i]);
+                                   layout->panel_goals + miss[i], ctx);
     }
     for (int32_t i = 0; i < misses && !status; ++i) {
-        if (statuses[i])
+        if (statuses[i] == PZ_ERR_CANCELLED)
+            status = pz_error(ctx, PZ_ERR_CANCELLED, "segment: cancelled"); /* nothing of it is cached */
+        else if (statuses[i])
             status = nomem(ctx);
         else {
             /* Stored as evaluated: the vetoes may change from call to call, the evaluation does not. */
@@ -228,13 +240,32 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
     return status;
 }
 
-void seg_progress(seg_layout *layout, const char *stage)
+/*
+ * ctx->progress gets the fraction of the whole pz_segment call: the stages are parts of it (seg_progress_part
+ * sets where the current one ends), and as the steps of a stage are not counted in advance, each step goes a
+ * twentieth of the way to the part's end. The fraction never decreases.
+ */
+void seg_progress(seg_layout *layout, const char *stage, pz_ctx *ctx)
 {
-    if (!layout->options->on_progress)
+    int report = ctx && ctx->progress && !ctx->quiet;
+    if (!layout->options->on_progress && !report)
         return;
     double worst = 0;
     for (int32_t p = 0; p < layout->panel_count; ++p)
         if (layout->panel_evaluated[p])
             worst = fmax(worst, layout->panel_goals[p].max_abs_strain);
-    layout->options->on_progress(layout->options->user, stage, layout->panel_count, worst);
+    if (layout->options->on_progress)
+        layout->options->on_progress(layout->options->user, stage, layout->panel_count, worst);
+    layout->progress += (layout->progress_limit - layout->progress) / 20;
+    if (!pz_cancelled(ctx)) /* on_progress may just have asked to stop: the run ends at the next check */
+        pz_progress(ctx, "segment", layout->progress, "%s: %d panels, worst strain %.3f", stage,
+                    (int)layout->panel_count, worst);
+}
+
+void seg_progress_part(seg_layout *layout, double limit, const char *stage, pz_ctx *ctx)
+{
+    if (layout->progress < layout->progress_limit)
+        layout->progress = layout->progress_limit; /* the part before is done */
+    layout->progress_limit = limit;
+    pz_progress(ctx, "segment", layout->progress, "%s", stage);
 }

@@ -249,7 +249,7 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
     /* The distance covers paths[0 .. measured - 1]; each round adds the paths inserted since (-1: none yet). */
     int32_t measured = -1;
     for (int round = 0; round < MAX_INSERTIONS_PER_LEVEL && !status; ++round) {
-        if ((status = seg_evaluate_panels(layout, NULL, ctx)))
+        if ((status = pz_check_cancel(ctx, "segment")) || (status = seg_evaluate_panels(layout, NULL, ctx)))
             break;
         if (!failing_panels(layout) || !any_helpful(layout, candidates, count))
             break;
@@ -296,7 +296,7 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
             status = seg_label_panels(layout, ctx);
         ++*inserted;
         if (!status && (status = seg_evaluate_panels(layout, NULL, ctx)) == PZ_OK)
-            seg_progress(layout, "insert");
+            seg_progress(layout, "insert", ctx);
     }
     free(in_paths);
     free(distance);
@@ -337,8 +337,7 @@ static pz_status panel_candidates(seg_layout *layout, int32_t p, pz_trace_paths 
     pz_trace_graph *graph = NULL;
     double *arms = NULL;
     pz_ctx local;
-    pz_ctx_init(&local);
-    local.quiet = 1;
+    pz_ctx_quiet(ctx, &local); /* failures only mean no candidates; a cancel is seen by the next check */
     pz_status status = pz_mesh_extract(layout->mesh, faces, count, &sub, &vertex_map, &face_map, ctx);
     if (status)
         return status;
@@ -387,6 +386,8 @@ static pz_status recurse_failing(seg_layout *layout, int32_t *inserted, pz_ctx *
     for (int32_t p = 0; p < panels && !status; ++p) {
         if (!layout->panel_goals[p].failures)
             continue;
+        if ((status = pz_check_cancel(ctx, "segment")))
+            break;
         pz_trace_paths *paths = NULL;
         status = panel_candidates(layout, p, &paths, ctx);
         if (status || !paths)
@@ -483,7 +484,7 @@ pz_status seg_insert_all(seg_layout *layout, pz_segment_result *result, pz_ctx *
     result->candidates_ms = 1e3 * (pz_seconds() - start);
     start = pz_seconds();
     if (!status)
-        seg_progress(layout, "candidates");
+        seg_progress(layout, "candidates", ctx);
     int32_t inserted = 0;
     if (!status)
         status = insert_greedy(layout, candidates, count, &inserted, ctx);

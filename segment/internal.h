@@ -84,6 +84,8 @@ typedef struct seg_layout {
     int32_t evaluation_count;
     int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
     double mean_edge;
+    /* ctx->progress: the fraction reported last, and where the current part of the run ends (seg_progress). */
+    double progress, progress_limit;
 } seg_layout;
 
 /* layout.c */
@@ -96,9 +98,14 @@ int32_t seg_mirror_edge(const seg_layout *layout, int32_t e);
 pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx);
 
 /* evaluate.c */
-/* Evaluates the panels with want[p] set (all when want is NULL), from the cache when it can. */
+/* Evaluates the panels with want[p] set (all when want is NULL), from the cache when it can.
+ * PZ_ERR_CANCELLED when ctx's cancel flag is set before or during the evaluations (nothing cancelled is
+ * cached). */
 pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *ctx);
-void seg_progress(seg_layout *layout, const char *stage);
+/* Reports a step of `stage` through options->on_progress and ctx->progress (stage "segment"). */
+void seg_progress(seg_layout *layout, const char *stage, pz_ctx *ctx);
+/* Starts the part of the run that ends at `limit` (0..1) of the whole, for ctx->progress. */
+void seg_progress_part(seg_layout *layout, double limit, const char *stage, pz_ctx *ctx);
 
 /* insert.c */
 pz_status seg_insert_sketches(seg_layout *layout, pz_ctx *ctx);

@@ -446,6 +446,8 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
     if (!mesh || !topology || !field || !options || field->face_count != topology->face_count)
         return pz_error(ctx, PZ_ERR_USAGE, "segment: no mesh, field or options, or a field of another mesh");
     pz_status status = check_options(options, ctx);
+    if (!status)
+        status = pz_check_cancel(ctx, "segment");
     if (status)
         return status;
     double start = pz_seconds();
@@ -455,24 +457,34 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
     if (!result)
         return nomem(ctx);
     status = layout_init(&layout, mesh, topology, field, options, ctx);
-    if (!status)
+    /* The parts of the run for ctx->progress, as shares of the time: the graph and candidates take a few per
+     * cent, insertion and removal with darts each a third to two thirds (the shared garments' report.json). */
+    if (!status) {
+        seg_progress_part(&layout, 0.05, "trace graph", ctx);
         status = pz_trace_graph_build(mesh, topology, field->directions, &options->graph, &layout.graph, ctx);
-    if (!status)
+    }
+    if (!status && !(status = pz_check_cancel(ctx, "segment")))
         status = detect_symmetry(&layout, ctx);
     result->graph_ms = 1e3 * (pz_seconds() - start);
-    if (!status)
+    if (!status && !(status = pz_check_cancel(ctx, "segment")))
         status = seg_insert_sketches(&layout, ctx);
     if (!status)
         status = seg_insert_seeds(&layout, ctx);
     if (!status)
         status = seg_label_panels(&layout, ctx);
-    if (!status)
+    if (!status) {
+        seg_progress_part(&layout, 0.4, "insert", ctx);
         status = seg_insert_all(&layout, result, ctx);
+    }
     result->inserted_count = layout.path_count;
-    if (!status)
+    if (!status) {
+        seg_progress_part(&layout, 0.97, "remove", ctx);
         status = remove_and_dart(&layout, result, ctx);
-    if (!status)
+    }
+    if (!status) {
+        seg_progress_part(&layout, 1.0, "result", ctx);
         status = fill_result(&layout, result, ctx);
+    }
     result->evaluation_count = layout.evaluation_count;
     if (!status) {
         result->symmetry = layout.symmetry; /* moved */
@@ -484,6 +496,8 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
         pz_segment_result_free(&result);
         return status;
     }
+    pz_progress(ctx, "segment", 1.0, "%d panels%s", (int)result->panel_count,
+                result->goals_met ? "" : ", goals not met");
     *out = result;
     return PZ_OK;
 }
