@@ -63,6 +63,14 @@ void pz_ctx_quiet(const pz_ctx *parent, pz_ctx *child)
     child->cancel = parent ? parent->cancel : NULL;
 }
 
+void pz_progress_range(pz_ctx *ctx, double from, double to)
+{
+    if (!ctx)
+        return;
+    ctx->progress_from = from;
+    ctx->progress_to = to;
+}
+
 int pz_cancelled(const pz_ctx *ctx)
 {
     return ctx && ctx->cancel && *ctx->cancel;
@@ -84,10 +92,15 @@ void pz_progress(pz_ctx *ctx, const char *stage, double fraction, const char *fm
     va_start(args, fmt);
     vsnprintf(message, sizeof message, fmt, args);
     va_end(args);
-    if (fraction < 0)
+    if (!(fraction >= 0))
         fraction = 0;
     if (fraction > 1)
         fraction = 1;
+    if (ctx->progress_to > ctx->progress_from)
+        fraction = ctx->progress_from + (ctx->progress_to - ctx->progress_from) * fraction;
+    if (fraction < ctx->progress_last)
+        fraction = ctx->progress_last;
+    ctx->progress_last = fraction;
     ctx->progress(ctx->progress_user, stage, fraction, message);
 }
 

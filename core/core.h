@@ -78,6 +78,9 @@ typedef struct pz_ctx {
     int verbose;       /* 1: pz_debug prints too */
     pz_progress_fn progress;        /* may be NULL */
     void *progress_user;            /* passed to progress */
+    double progress_from, progress_to; /* the part of the whole that a stage's 0..1 maps to (both 0: all of it);
+                                          a pipeline sets them around each stage it calls */
+    double progress_last;           /* the last fraction reported: reports never go back */
     volatile const int *cancel;     /* may be NULL; non-zero asks the running call to stop */
 } pz_ctx;
 
@@ -90,6 +93,9 @@ void pz_ctx_init(pz_ctx *ctx);
  */
 void pz_ctx_quiet(const pz_ctx *parent, pz_ctx *child);
 
+/** Maps the progress of the stage called next into from .. to of the whole (see pz_progress). */
+void pz_progress_range(pz_ctx *ctx, double from, double to);
+
 /** 1 when the caller asked the running call to stop (ctx->cancel set). */
 int pz_cancelled(const pz_ctx *ctx);
 
@@ -99,7 +105,13 @@ int pz_cancelled(const pz_ctx *ctx);
  */
 pz_status pz_check_cancel(pz_ctx *ctx, const char *what);
 
-/** Reports progress through ctx->progress (nothing when it is NULL; ctx->quiet silences notes, not this). */
+/**
+ * Reports progress through ctx->progress (nothing when it is NULL; ctx->quiet
+ * silences notes, not this). `fraction` (clamped to 0..1) is the stage's own;
+ * it is mapped into ctx->progress_from .. progress_to when those are set, and
+ * never reported below an earlier report (a stage run again, as the
+ * segmentation's verdict rounds are, does not move the bar back).
+ */
 void pz_progress(pz_ctx *ctx, const char *stage, double fraction, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 4, 5)))

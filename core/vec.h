@@ -29,6 +29,13 @@ static inline void pz_vec3_cross(const double *a, const double *b, double *out)
 
 static inline double pz_vec3_norm(const double *a) { return sqrt(pz_vec3_dot(a, a)); }
 
+static inline double pz_vec3_distance(const double *a, const double *b)
+{
+    double d[3];
+    pz_vec3_sub(a, b, d);
+    return pz_vec3_norm(d);
+}
+
 /* Scales v to unit length (a zero vector stays zero); returns the old length. */
 static inline double pz_vec3_normalize(double *v)
 {

@@ -139,7 +139,8 @@ typedef struct pz_field {
  * anisotropic curvature has no preferred direction; the field is then seeded
  * by one face aligned with its first edge.
  * Errors: PZ_ERR_USAGE (bad options), PZ_ERR_NOMEM, PZ_ERR_INTERNAL (failed
- * factorisation).
+ * factorisation), PZ_ERR_CANCELLED (ctx->cancel set; checked between steps,
+ * not inside the one CHOLMOD factorisation).
  */
 pz_status pz_field_compute(const pz_mesh *mesh, const pz_topology *topology, const pz_field_options *options,
                            pz_field **out, pz_ctx *ctx);

@@ -45,12 +45,11 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "param.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-#define PZ_METRICS_PI 3.14159265358979323846
 
 /* ------------------------------------------------------------------------ */
 /* One triangle                                                              */
@@ -70,16 +69,13 @@ static double triangle_jacobian(const double p3[3][3], const double p2[3][2], do
     return det;
 }
 
-static double norm3(const double a[3]) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
-static double dot3(const double a[3], const double b[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-
 /* Angle between the thread directions in 3D, radians (pi/2 for a degenerate map). */
 static double thread_angle(const double du[3], const double dv[3])
 {
-    double lu = norm3(du), lv = norm3(dv);
+    double lu = pz_vec3_norm(du), lv = pz_vec3_norm(dv);
     if (lu == 0 || lv == 0)
-        return PZ_METRICS_PI / 2;
-    double c = dot3(du, dv) / (lu * lv);
+        return PZ_PI / 2;
+    double c = pz_vec3_dot(du, dv) / (lu * lv);
     return acos(c > 1 ? 1 : c < -1 ? -1 : c);
 }
 
@@ -92,15 +88,15 @@ void pz_metrics_triangle_strain(const double p3[3][3], const double p2[3][2], do
         *strain_warp = *strain_weft = *shear_deg = 0;
         return;
     }
-    *strain_warp = norm3(dv) - 1;
-    *strain_weft = norm3(du) - 1;
-    *shear_deg = thread_angle(du, dv) * 180 / PZ_METRICS_PI - 90;
+    *strain_warp = pz_vec3_norm(dv) - 1;
+    *strain_weft = pz_vec3_norm(du) - 1;
+    *shear_deg = thread_angle(du, dv) * 180 / PZ_PI - 90;
 }
 
 /* Singular values of the 3 x 2 J from its Gram matrix J^T J. */
 static void singular_values(const double du[3], const double dv[3], double *s1, double *s2)
 {
-    double a = dot3(du, du), b = dot3(du, dv), c = dot3(dv, dv);
+    double a = pz_vec3_dot(du, du), b = pz_vec3_dot(du, dv), c = pz_vec3_dot(dv, dv);
     double mean = (a + c) / 2, radius = sqrt((a - c) * (a - c) / 4 + b * b);
     double l1 = mean + radius, l2 = mean - radius;
     *s1 = sqrt(l1 > 0 ? l1 : 0);
@@ -114,17 +110,20 @@ static double area3(const double p3[3][3])
         e1[k] = p3[1][k] - p3[0][k];
         e2[k] = p3[2][k] - p3[0][k];
     }
-    double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-    return norm3(n) / 2;
+    double n[3];
+    pz_vec3_cross(e1, e2, n);
+    return pz_vec3_norm(n) / 2;
 }
 
 static double corner_angle3(const double *a, const double *b, const double *c)
 {
-    double x[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, y[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double lx = norm3(x), ly = norm3(y);
+    double x[3], y[3];
+    pz_vec3_sub(b, a, x);
+    pz_vec3_sub(c, a, y);
+    double lx = pz_vec3_norm(x), ly = pz_vec3_norm(y);
     if (lx == 0 || ly == 0)
         return 0;
-    double cosine = dot3(x, y) / (lx * ly);
+    double cosine = pz_vec3_dot(x, y) / (lx * ly);
     return acos(cosine > 1 ? 1 : cosine < -1 ? -1 : cosine);
 }
 
@@ -132,12 +131,6 @@ static double corner_angle2(const double *a, const double *b, const double *c)
 {
     double x0 = b[0] - a[0], x1 = b[1] - a[1], y0 = c[0] - a[0], y1 = c[1] - a[1];
     return fabs(atan2(x0 * y1 - x1 * y0, x0 * y0 + x1 * y1));
-}
-
-static double distance3(const double *a, const double *b)
-{
-    double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-    return norm3(d);
 }
 
 static double distance2(const double *a, const double *b) { return hypot(a[0] - b[0], a[1] - b[1]); }
@@ -343,7 +336,7 @@ static double polyline3(const double *positions, const int32_t *ids, int32_t n)
 {
     double length = 0;
     for (int32_t i = 0; i + 1 < n; ++i)
-        length += distance3(positions + 3 * ids[i], positions + 3 * ids[i + 1]);
+        length += pz_vec3_distance(positions + 3 * ids[i], positions + 3 * ids[i + 1]);
     return length;
 }
 
@@ -379,12 +372,12 @@ static int seam_metrics(const pz_seam *seam, const double *positions, const doub
 static double leg_length(const double *points, int dimension, const double *positions, const int32_t *leg, int32_t n,
                          int32_t tip)
 {
-    int tip_after_last = distance3(positions + 3 * leg[n - 1], positions + 3 * tip) <
-                         distance3(positions + 3 * leg[0], positions + 3 * tip);
+    int tip_after_last = pz_vec3_distance(positions + 3 * leg[n - 1], positions + 3 * tip) <
+                         pz_vec3_distance(positions + 3 * leg[0], positions + 3 * tip);
     int32_t end = tip_after_last ? leg[n - 1] : leg[0];
     if (dimension == 2)
         return polyline2(points, leg, n) + distance2(points + 2 * end, points + 2 * tip);
-    return polyline3(points, leg, n) + distance3(points + 3 * end, points + 3 * tip);
+    return polyline3(points, leg, n) + pz_vec3_distance(points + 3 * end, points + 3 * tip);
 }
 
 static int dart_metrics(const pz_dart *dart, const double *positions, const double *uv, pz_dart_metrics *m)
@@ -472,7 +465,7 @@ static void measure_faces(const pz_mesh *mesh, const double *positions, const do
         ff->area_2d_signed[f] = det / 2;
         singular_values(du, dv, &s1, &s2);
         ff->arap[f] = det != 0 ? area_2d * ((s1 - 1) * (s1 - 1) + (s2 - 1) * (s2 - 1)) : 0;
-        double su = norm3(du) - 1, sv = norm3(dv) - 1, phi = PZ_METRICS_PI / 2 - thread_angle(du, dv);
+        double su = pz_vec3_norm(du) - 1, sv = pz_vec3_norm(dv) - 1, phi = PZ_PI / 2 - thread_angle(du, dv);
         ff->orthotropic[f] = det != 0 ? 0.5 * area_2d * (fabric->k_su * su * su + fabric->k_sv * sv * sv) +
                                             0.5 * area_2d * fabric->k_r * phi * phi
                                       : 0;
@@ -493,7 +486,7 @@ static void measure_edges(const pz_pattern *pattern, const pz_topology *t, const
     for (int32_t e = 0; e < t->edge_count; ++e) {
         int32_t h = t->edge_halfedge[2 * e], p = pattern->face_panel[pz_he_face(h)];
         int32_t a = pz_he_from(t, h), b = pz_he_to(t, h);
-        double l0 = distance3(positions + 3 * a, positions + 3 * b), l = distance2(uv + 2 * a, uv + 2 * b);
+        double l0 = pz_vec3_distance(positions + 3 * a, positions + 3 * b), l = distance2(uv + 2 * a, uv + 2 * b);
         length_sum[p] += l0;
         length_error_sum[p] += fabs(l0 - l);
         if (t->edge_halfedge[2 * e + 1] < 0) {

@@ -34,6 +34,12 @@ double pl_round(double value, int decimals);
 /** The base name of a path without its extension (malloc'd; NULL when out of memory). */
 char *pl_base_name(const char *path);
 
+/**
+ * Progress: reports `stage` at `from` of the whole, then maps the stage's own
+ * 0..1 reports into from .. to (pz_progress_range).
+ */
+void pl_stage(pz_ctx *ctx, const char *stage, double from, double to, const char *message);
+
 /** "run" or "flatten": the first word of the pipeline's messages. */
 const char *pl_who(const pz_result *result);
 

@@ -36,6 +36,13 @@ double pl_round(double value, int decimals)
     return round(value * scale) / scale;
 }
 
+void pl_stage(pz_ctx *ctx, const char *stage, double from, double to, const char *message)
+{
+    pz_progress_range(ctx, 0, 0);
+    pz_progress(ctx, stage, from, "%s", message);
+    pz_progress_range(ctx, from, to);
+}
+
 const char *pl_who(const pz_result *result)
 {
     return result && result->from_run ? "run" : "flatten";
@@ -250,7 +257,9 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
                                                      sizeof(double))))
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
         if (status == PZ_OK) {
-            pz_progress(ctx, "flatten", 0.7, "%d panels", (int)result->pattern->panel_count);
+            char message[64];
+            snprintf(message, sizeof message, "%d panels", (int)result->pattern->panel_count);
+            pl_stage(ctx, "flatten", 0.7, 0.9, message);
             status = pl_flatten_pattern(options, result->pattern, run->garment.mesh->unit_scale, result->grain,
                                         strain_limit, result->uv, &result->backend, ctx);
         }
@@ -308,7 +317,9 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
     memset(&run, 0, sizeof run);
     run.panels = panels;
     int segment = from_run && !panels;
-    pz_progress(ctx, segment ? "prepare" : "load", 0, "%s", options && options->name ? options->name : "");
+    /* Progress: this call's stages share the whole 0..1 (pl_stage); a new call starts from 0. */
+    ctx->progress_last = 0;
+    pl_stage(ctx, segment ? "prepare" : "load", 0, 0.1, options && options->name ? options->name : "");
     pz_status status = pl_load(mesh, &result->options, segment && result->options.prepare, result, &run.garment, ctx);
     if (status == PZ_OK && segment)
         status = pl_segmenter_create(&result->options, result->prepared, result->grain, &run.segmenter, ctx);
@@ -338,12 +349,13 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
         result->options.output.garment_name = result->garment_name;
     }
     if (status == PZ_OK) {
-        pz_progress(ctx, "export", 0.9, "pieces and marker");
+        pl_stage(ctx, "export", 0.9, 1.0, "pieces and marker");
         status = build_pieces(result, ctx);
     }
     result->timings.pieces = pl_elapsed_ms(mark, pz_seconds());
     result->timings.total = pl_elapsed_ms(start, pz_seconds());
     pipeline_run_clear(&run);
+    pz_progress_range(ctx, 0, 0);
     result->options.panels = NULL;  /* the caller's, and not needed beyond this call */
     if (status == PZ_OK)
         status = pz_check_cancel(ctx, pl_who(result));
@@ -351,6 +363,7 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
         pz_result_free(&result);
         return status;
     }
+    pz_progress_range(ctx, 0, 0);
     pz_progress(ctx, "done", 1, "%d panels", (int)result->pattern->panel_count);
     *out = result;
     return PZ_OK;

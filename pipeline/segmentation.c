@@ -238,7 +238,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         pz_field_options options = seg->options->field;
         options.sketch = sketch;
         options.use_poses = 1;
-        pz_progress(ctx, "field", 0.1, "cross-field");
+        pl_stage(ctx, "field", 0.1, 0.2, "cross-field");
         status = pz_field_compute(garment, topology, &options, &seg->field, ctx);
         seg->field_ms = pl_elapsed_ms(start, pz_seconds());
         if (status == PZ_OK)
@@ -246,6 +246,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
                     (int)seg->field->singularity_count);
     }
     double field_end = pz_seconds();
+    pl_stage(ctx, "segment", 0.2, 0.7, "layout");
     /* Goals stricter than the defaults: the layout is made here, verdict rounds included, so that it has at
      * least as many panels as every looser setting of the ladder (solve_setting); the flatten pipeline's
      * own verdict then accepts it as it is (the same flattening: accept_pattern). */
@@ -596,7 +597,6 @@ static void on_progress(void *user, const char *stage, int32_t panel_count, doub
         pz_note(ctx, "run: %s: %d panels, worst strain %.4f", stage, (int)panel_count, worst_strain);
     else
         pz_note(ctx, "run: %s: %d panels", stage, (int)panel_count);
-    pz_progress(ctx, "segment", 0.2, "%s: %d panels", stage, (int)panel_count);
 }
 
 pz_status pl_segmenter_create(const pz_run_options *options, const pz_prepare_result *prepared, const double grain[3],

@@ -284,7 +284,7 @@ pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx)
         pz_geom_angle_defect(layout->mesh, layout->topology, defect);
     int both_sides = 0;
     for (int round = 0; !status && round < SEG_FALLBACK_ROUNDS; ++round) {
-        if ((status = seg_evaluate_panels(layout, NULL, ctx)))
+        if ((status = pz_check_cancel(ctx, "segment")) || (status = seg_evaluate_panels(layout, NULL, ctx)))
             break;
         int32_t before = *inserted;
         /* One cut per failing panel of this labelling; paths are collected first (labels change on insertion). */
@@ -320,7 +320,7 @@ pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx)
         if (!status)
             status = seg_label_panels(layout, ctx);
         if (!status && (status = seg_evaluate_panels(layout, NULL, ctx)) == PZ_OK)
-            seg_progress(layout, "insert");
+            seg_progress(layout, "insert", ctx);
         if (*inserted == before) {
             /* A failing panel whose mirror image meets the goals gets no cut by mirroring: cut it itself. */
             if (both_sides || !skipped)

@@ -1,8 +1,10 @@
 /*
- * segment/internal.h -- the layout state shared by segment/layout.c (panels,
- * evaluation cache, path insertion, result), segment/fallback.c (the cut
- * through a panel's worst vertex) and segment/removal.c (segments, removal,
- * darts). Not part of the public interface.
+ * segment/internal.h -- the layout state shared by segment/layout.c (set-up,
+ * stages, result), segment/labels.c (the panels of the current cuts),
+ * segment/evaluate.c (their goals, the evaluation cache, progress),
+ * segment/insert.c (path insertion), segment/fallback.c (the cut through a
+ * panel's worst vertex) and segment/removal.c (segments, removal, darts).
+ * Not part of the public interface.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -82,18 +84,35 @@ typedef struct seg_layout {
     int32_t evaluation_count;
     int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
     double mean_edge;
+    /* ctx->progress: the fraction reported last, and where the current part of the run ends (seg_progress). */
+    double progress, progress_limit;
 } seg_layout;
 
 /* layout.c */
 int32_t seg_edge_between(const seg_layout *layout, int32_t a, int32_t b);
 int32_t seg_cut_degree(const seg_layout *layout, int32_t v);
-pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx);
-/* Evaluates the panels with want[p] set (all when want is NULL), from the cache when it can. */
-pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *ctx);
-void seg_progress(seg_layout *layout, const char *stage);
 /* The edge of the mirror image of edge e (-1 none). */
 int32_t seg_mirror_edge(const seg_layout *layout, int32_t e);
 
+/* labels.c: relabels the panels after cut flags changed (nothing to do while labels_valid). */
+pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx);
+
+/* evaluate.c */
+/* Evaluates the panels with want[p] set (all when want is NULL), from the cache when it can.
+ * PZ_ERR_CANCELLED when ctx's cancel flag is set before or during the evaluations (nothing cancelled is
+ * cached). */
+pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *ctx);
+/* Reports a step of `stage` through options->on_progress and ctx->progress (stage "segment"). */
+void seg_progress(seg_layout *layout, const char *stage, pz_ctx *ctx);
+/* Starts the part of the run that ends at `limit` (0..1) of the whole, for ctx->progress. */
+void seg_progress_part(seg_layout *layout, double limit, const char *stage, pz_ctx *ctx);
+
+/* insert.c */
+pz_status seg_insert_sketches(seg_layout *layout, pz_ctx *ctx);
+/* options->seed_cuts: cut from the start, owned by one empty path marked SEG_SEEDED (never removed). */
+pz_status seg_insert_seeds(seg_layout *layout, pz_ctx *ctx);
+/* Candidates, greedy insertion, recursion into failing panels, then the fallback cuts. */
+pz_status seg_insert_all(seg_layout *layout, pz_segment_result *result, pz_ctx *ctx);
 /* The graph arm of vertex v closest to direction d (tangent or not). */
 uint8_t seg_closest_arm(const pz_trace_graph *graph, int32_t v, const double d[3]);
 /* Inserts a path and, with a symmetry plane, its mirror image when it has one. */

@@ -349,11 +349,13 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
             const seg_segment *s = segments.items + order[i].segment;
             if (s->sketch || !all_cut(layout, s))
                 continue;
+            if ((status = pz_check_cancel(ctx, "segment")))
+                break;
             int done = 0;
             status = try_remove(layout, s, &done, ctx);
             if (done) {
                 ++*removed;
-                seg_progress(layout, "remove");
+                seg_progress(layout, "remove", ctx);
             }
         }
         free(order);
@@ -612,13 +614,15 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
         const seg_segment *s = segments.items + order[i].segment;
         if (!dart_candidate(layout, s))
             continue;
+        if ((status = pz_check_cancel(ctx, "segment")))
+            break;
         int made = 0;
         status = try_dart(layout, s, defect, &made, ctx);
         if (made) {
             ++*darts;
             /* From the cache (the trial evaluated them): the progress shows their strain. */
             status = seg_evaluate_panels(layout, NULL, ctx);
-            seg_progress(layout, "darts");
+            seg_progress(layout, "darts", ctx);
         }
     }
     free(order);

@@ -196,7 +196,8 @@ typedef struct pz_segment_options {
     const uint8_t *seed_cuts;
     /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
      * each insertion, removal and dart with the current panel count and the worst strain among the
-     * current panels that have been flattened (0 when none has). */
+     * current panels that have been flattened (0 when none has). The context's progress callback
+     * (pz_ctx.progress) is called at the same steps, with the fraction done. */
     void (*on_progress)(void *user, const char *stage, int32_t panel_count, double worst_strain);
     void *user;
 } pz_segment_options;
@@ -269,9 +270,15 @@ typedef struct pz_segment_result {
  * PZ_SYMMETRY_AUTO a detected plane whose residual exceeds 0.25 mean edges
  * is not used (result->symmetry.found = 0, its residual kept): mirrored
  * paths would land off the mirrored geometry (docs/segment.md).
+ * Progress goes to ctx->progress (stage "segment", a fraction of the call
+ * that never decreases) as well as to options->on_progress; ctx->cancel is
+ * checked between steps (each insertion, removal, dart, panel evaluation),
+ * so a cancelled call returns within about one step.
  * Caller frees *out with pz_segment_result_free.
  * Errors: PZ_ERR_USAGE (bad options), PZ_ERR_DATA (a sketch point off the
- * mesh), PZ_ERR_NOMEM, PZ_ERR_INTERNAL.
+ * mesh), PZ_ERR_NOMEM, PZ_ERR_INTERNAL, PZ_ERR_CANCELLED (*out stays NULL,
+ * nothing leaks, and a shared options->cache keeps only finished
+ * evaluations).
  */
 pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field,
                      const pz_segment_options *options, pz_segment_result **out, pz_ctx *ctx);

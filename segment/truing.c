@@ -39,6 +39,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "segment/segment.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -57,7 +58,6 @@
 #define SAFETY_ROUNDS 6
 #define MIN_AREA_RATIO 0.2
 #define MIN_NORMAL_COS 0.5 /* 60 degrees */
-#define PI 3.14159265358979323846
 
 /* Where a moved vertex sits on the original surface. */
 typedef struct surface_point {
@@ -88,38 +88,12 @@ static pz_status nomem(pz_ctx *ctx)
     return pz_error(ctx, PZ_ERR_NOMEM, "segment: truing: out of memory");
 }
 
-static void sub3(const double *a, const double *b, double *out)
-{
-    out[0] = a[0] - b[0];
-    out[1] = a[1] - b[1];
-    out[2] = a[2] - b[2];
-}
-
-static double dot3(const double *a, const double *b)
-{
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void cross3(const double *a, const double *b, double *out)
-{
-    out[0] = a[1] * b[2] - a[2] * b[1];
-    out[1] = a[2] * b[0] - a[0] * b[2];
-    out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-static double dist3(const double *a, const double *b)
-{
-    double d[3];
-    sub3(a, b, d);
-    return sqrt(dot3(d, d));
-}
-
 static void face_normal(const double *positions, const int32_t *face, double *normal)
 {
     double e1[3], e2[3];
-    sub3(positions + 3 * face[1], positions + 3 * face[0], e1);
-    sub3(positions + 3 * face[2], positions + 3 * face[0], e2);
-    cross3(e1, e2, normal);
+    pz_vec3_sub(positions + 3 * face[1], positions + 3 * face[0], e1);
+    pz_vec3_sub(positions + 3 * face[2], positions + 3 * face[0], e2);
+    pz_vec3_cross(e1, e2, normal);
 }
 
 /* CSR adjacency: for each vertex, the faces (or edges) around it, in increasing order. */
@@ -167,17 +141,17 @@ static int32_t edge_other(const pz_topology *top, int32_t e, int32_t v)
 static void closest_on_triangle(const double *p, const double *a, const double *b, const double *c, double bary[3])
 {
     double ab[3], ac[3], ap[3];
-    sub3(b, a, ab);
-    sub3(c, a, ac);
-    sub3(p, a, ap);
-    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    pz_vec3_sub(b, a, ab);
+    pz_vec3_sub(c, a, ac);
+    pz_vec3_sub(p, a, ap);
+    double d1 = pz_vec3_dot(ab, ap), d2 = pz_vec3_dot(ac, ap);
     if (d1 <= 0 && d2 <= 0) {
         bary[0] = 1, bary[1] = 0, bary[2] = 0;
         return;
     }
     double bp[3];
-    sub3(p, b, bp);
-    double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    pz_vec3_sub(p, b, bp);
+    double d3 = pz_vec3_dot(ab, bp), d4 = pz_vec3_dot(ac, bp);
     if (d3 >= 0 && d4 <= d3) {
         bary[0] = 0, bary[1] = 1, bary[2] = 0;
         return;
@@ -189,8 +163,8 @@ static void closest_on_triangle(const double *p, const double *a, const double *
         return;
     }
     double cp[3];
-    sub3(p, c, cp);
-    double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    pz_vec3_sub(p, c, cp);
+    double d5 = pz_vec3_dot(ab, cp), d6 = pz_vec3_dot(ac, cp);
     if (d6 >= 0 && d5 <= d6) {
         bary[0] = 0, bary[1] = 0, bary[2] = 1;
         return;
@@ -249,7 +223,7 @@ static void project(truing *t, int32_t v, const double *p, double *out, surface_
         for (int d = 0; d < 3; ++d)
             q[d] = bary[0] * t->rest[3 * face[0] + d] + bary[1] * t->rest[3 * face[1] + d] +
                    bary[2] * t->rest[3 * face[2] + d];
-        double distance = dist3(p, q);
+        double distance = pz_vec3_distance(p, q);
         if (distance < best) {
             best = distance;
             memcpy(out, q, sizeof q);
@@ -265,8 +239,8 @@ static void project(truing *t, int32_t v, const double *p, double *out, surface_
 static void move_vertex(truing *t, int32_t v, const double *target, double limit)
 {
     double step[3], clamped[3];
-    sub3(target, t->rest + 3 * v, step);
-    double length = sqrt(dot3(step, step));
+    pz_vec3_sub(target, t->rest + 3 * v, step);
+    double length = pz_vec3_norm(step);
     double scale = length > limit ? limit / length : 1;
     for (int d = 0; d < 3; ++d)
         clamped[d] = t->rest[3 * v + d] + scale * step[d];
@@ -276,8 +250,10 @@ static void move_vertex(truing *t, int32_t v, const double *target, double limit
 static double shortest_edge(const truing *t, int32_t v)
 {
     double shortest = INFINITY;
-    for (int32_t i = t->vertex_edge_offsets[v]; i < t->vertex_edge_offsets[v + 1]; ++i)
-        shortest = fmin(shortest, dist3(t->rest + 3 * v, t->rest + 3 * edge_other(t->topology, t->vertex_edges[i], v)));
+    for (int32_t i = t->vertex_edge_offsets[v]; i < t->vertex_edge_offsets[v + 1]; ++i) {
+        int32_t other = edge_other(t->topology, t->vertex_edges[i], v);
+        shortest = fmin(shortest, pz_vec3_distance(t->rest + 3 * v, t->rest + 3 * other));
+    }
     return isfinite(shortest) ? shortest : 0;
 }
 
@@ -290,7 +266,7 @@ static void vertex_normal(const truing *t, int32_t v, double normal[3])
     for (int32_t i = t->vertex_face_offsets[v]; i < t->vertex_face_offsets[v + 1]; ++i)
         for (int d = 0; d < 3; ++d)
             normal[d] += t->original_normals[3 * t->vertex_faces[i] + d];
-    double length = sqrt(dot3(normal, normal));
+    double length = pz_vec3_norm(normal);
     for (int d = 0; d < 3; ++d)
         normal[d] = length > 0 ? normal[d] / length : 0;
 }
@@ -301,18 +277,18 @@ static double tangent_turn_deg(const truing *t, int32_t v, const double *before,
 {
     double normal[3], a[3], b[3];
     vertex_normal(t, v, normal);
-    sub3(at, before, a);
-    sub3(after, at, b);
-    double na = dot3(a, normal), nb = dot3(b, normal);
+    pz_vec3_sub(at, before, a);
+    pz_vec3_sub(after, at, b);
+    double na = pz_vec3_dot(a, normal), nb = pz_vec3_dot(b, normal);
     for (int d = 0; d < 3; ++d) {
         a[d] -= na * normal[d];
         b[d] -= nb * normal[d];
     }
-    double la = sqrt(dot3(a, a)), lb = sqrt(dot3(b, b));
+    double la = pz_vec3_norm(a), lb = pz_vec3_norm(b);
     if (!(la > 0) || !(lb > 0))
         return 0;
-    double c = dot3(a, b) / (la * lb);
-    return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 180 / PI;
+    double c = pz_vec3_dot(a, b) / (la * lb);
+    return acos(c > 1 ? 1 : c < -1 ? -1 : c) * 180 / PZ_PI;
 }
 
 /* Summed tangential turn between consecutive edges of a chain (positions), and the number of turns. */
@@ -431,10 +407,11 @@ static int face_ok(const truing *t, int32_t f)
     double normal[3];
     face_normal(t->mesh->positions, t->mesh->faces + 3 * f, normal);
     const double *original = t->original_normals + 3 * f;
-    double area = sqrt(dot3(normal, normal)), original_area = sqrt(dot3(original, original));
+    double area = pz_vec3_norm(normal), original_area = pz_vec3_norm(original);
     if (!(original_area > 0))
         return 1;
-    return area >= MIN_AREA_RATIO * original_area && dot3(normal, original) >= MIN_NORMAL_COS * area * original_area;
+    return area >= MIN_AREA_RATIO * original_area &&
+           pz_vec3_dot(normal, original) >= MIN_NORMAL_COS * area * original_area;
 }
 
 /* Sends the moved vertices of bad faces half-way back (or all the way in the last round). Returns bad faces. */
@@ -695,7 +672,8 @@ pz_status pz_segment_true_seams(pz_mesh *mesh, const pz_topology *topology, cons
                 break;
         for (int32_t v = 0; v < mesh->vertex_count; ++v)
             if (t.where[v].face >= 0)
-                outcome.max_move_mm = fmax(outcome.max_move_mm, dist3(t.rest + 3 * v, mesh->positions + 3 * v));
+                outcome.max_move_mm =
+                    fmax(outcome.max_move_mm, pz_vec3_distance(t.rest + 3 * v, mesh->positions + 3 * v));
         status = move_poses(&t, ctx);
         outcome.mean_turn_after_deg = mean_turn(&t, &chains, mesh->positions);
     }

@@ -125,10 +125,22 @@ static void test_progress(void)
     CHECK(log.calls == 1 && strcmp(log.stage, "segment") == 0 && strcmp(log.message, "3 panels") == 0 &&
               log.fraction == 0.25,
           "progress: %d calls, '%s' %g '%s'", log.calls, log.stage, log.fraction, log.message);
+    ctx.progress_last = 0; /* reports never go back: start again to see the clamp */
     pz_progress(&ctx, "field", -0.5, "before");
     CHECK(log.calls == 2 && log.fraction == 0.0, "fraction -0.5 passed as %g", log.fraction);
     pz_progress(&ctx, "field", 1.5, "after");
     CHECK(log.calls == 3 && log.fraction == 1.0, "fraction 1.5 passed as %g", log.fraction);
+    /* A stage's own 0..1 mapped into its part of the whole; a later report below an earlier one is held. */
+    ctx.progress_last = 0;
+    pz_progress_range(&ctx, 0.2, 0.7);
+    pz_progress(&ctx, "segment", 0.5, "half");
+    CHECK(fabs(log.fraction - 0.45) < 1e-12, "0.5 of 0.2..0.7 passed as %g", log.fraction);
+    pz_progress(&ctx, "segment", 0.1, "again");
+    CHECK(fabs(log.fraction - 0.45) < 1e-12, "a report went back to %g", log.fraction);
+    pz_progress_range(&ctx, 0, 0);
+    pz_progress(&ctx, "done", 1.0, "all");
+    CHECK(log.fraction == 1.0, "without a range 1 passed as %g", log.fraction);
+    log.calls = 3;
     /* quiet silences the notes on stderr, not a callback the caller set (a binding shows its own bar). */
     ctx.quiet = 1;
     pz_progress(&ctx, "field", 0.5, "quiet");
