@@ -40,9 +40,8 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "param.h"
+#include "param/internal.h"
 
-#include <cholmod.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>

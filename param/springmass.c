@@ -89,17 +89,12 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "param.h"
+#include "param/internal.h"
 
-#include <cholmod.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-/* From wirewarp.c: moves vertices of flipped faces into the kernel of their star. */
-int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
-/* From lscm.c: faces grouped by panel. */
-pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
 
 #define SM_PI 3.14159265358979323846
 #define SM_SPRING_C 0.5          /* wang2002 Sec. 5: C = 0.5 */

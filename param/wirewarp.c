@@ -71,19 +71,12 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "param.h"
+#include "param/internal.h"
 #include "core/util.h"
 
-#include <cholmod.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
-
-/* From lscm.c: faces grouped by panel, and the side-by-side layout of pieces. */
-pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
-void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const int32_t *order, double *uv);
 
 #define WW_PI 3.14159265358979323846
 #define WW_EPS 1e-12               /* diagonal regularization of J J^T (rows are O(1)) */
