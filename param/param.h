@@ -352,6 +352,40 @@ pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options
                             const pz_feature_curves *features, double *uv, pz_wirewarp_result *result,
                             pz_ctx *ctx);
 
+/**
+ * WireWarping in two parts: pz_param_wirewarp is exactly pz_wirewarp_setup,
+ * pz_wirewarp_solve, pz_wirewarp_solver_free. The set-up builds the wires,
+ * wire-patches and wire-nodes of the pattern and `features` (which depend on
+ * nothing else); each solve takes its own options (scheme, interior weights,
+ * iterations, grain) and keeps the interior system's CHOLMOD symbolic
+ * analysis for the next interior solve with the same wires. Solving twice
+ * with the same options gives the same uv.
+ */
+typedef struct pz_wirewarp_solver pz_wirewarp_solver;
+
+/**
+ * Sets up WireWarping of `pattern` along `features` (may be NULL; copied).
+ * The solver keeps a pointer to `pattern`, which must stay unchanged and
+ * outlive it. *out: the caller's, freed with pz_wirewarp_solver_free (NULL
+ * on error). Errors as pz_param_wirewarp's structural ones (PZ_ERR_DATA for
+ * a wire-patch that is not a disk or a curve off the mesh edges).
+ */
+pz_status pz_wirewarp_setup(const pz_pattern *pattern, const pz_feature_curves *features, pz_wirewarp_solver **out,
+                            pz_ctx *ctx);
+
+/**
+ * One WireWarping with a set-up solver: uv and result (may be NULL) as
+ * pz_param_wirewarp gives them with these options (may be NULL). Trimming
+ * dangling curve ends (docs/wirewarp.md) builds the trimmed wires for that
+ * solve only. PZ_ERR_CANCELLED between steps when ctx->cancel is set. One
+ * solver serves one thread at a time.
+ */
+pz_status pz_wirewarp_solve(pz_wirewarp_solver *solver, const pz_wirewarp_options *options, double *uv,
+                            pz_wirewarp_result *result, pz_ctx *ctx);
+
+/** Frees the solver and sets *solver to NULL (accepts NULL and *solver == NULL). */
+void pz_wirewarp_solver_free(pz_wirewarp_solver **solver);
+
 /* ------------------------------------------------------------------------ */
 /* Metrics                                                                   */
 /* ------------------------------------------------------------------------ */

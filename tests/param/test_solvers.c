@@ -14,7 +14,12 @@
  *  - a solve cancelled through the context returns PZ_ERR_CANCELLED, and the
  *    same solver then solves as if nothing had happened;
  *  - usage errors: no solver pointer, no pattern, negative weights (*out stays
- *    NULL), no uv.
+ *    NULL), no uv;
+ *  - WireWarping (pz_wirewarp_setup, pz_wirewarp_solve) on a hemisphere and on
+ *    the bodice's front and back with a feature curve: the global and the
+ *    progressive scheme, cotangent and 1/length interiors, each solve of one
+ *    set-up equal byte for byte to pz_param_wirewarp with the same options
+ *    (the second and later solves factorize the kept interior analysis).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -178,6 +183,85 @@ static void test_usage(void)
     pz_pattern_free(&pattern);
 }
 
+/* A key curve down the middle of panel 0: its vertices nearest to x = 0 from the lowest to the highest. */
+static pz_feature_curves *middle_curve(const pz_pattern *pattern)
+{
+    const pz_mesh *mesh = pattern->mesh;
+    pz_topology *topology = NULL;
+    REQUIRE_OK(pz_topology_build(mesh, &topology, &ctx), ctx);
+    double low = INFINITY, high = -INFINITY;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v) {
+        low = fmin(low, mesh->positions[3 * v + 2]);
+        high = fmax(high, mesh->positions[3 * v + 2]);
+    }
+    pz_feature_polyline line = {.kind = PZ_FEATURE_KEY, .point_count = 2};
+    double points[6] = {0, -1e9, 0, 0, -1e9, 0};
+    /* The panel's points nearest to the bottom and the top of its middle. */
+    double best[2] = {INFINITY, INFINITY};
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k) {
+            int32_t v = mesh->faces[3 * f + k];
+            const double *p = mesh->positions + 3 * v;
+            if (pattern->face_panel[f] != 0 || topology->vertex_on_boundary[v])
+                continue;
+            for (int end = 0; end < 2; ++end) {
+                double z = end ? high - 0.25 * (high - low) : low + 0.25 * (high - low);
+                double d = fabs(p[0]) + fabs(p[2] - z);
+                if (d < best[end]) {
+                    best[end] = d;
+                    memcpy(points + 3 * end, p, 3 * sizeof(double));
+                }
+            }
+        }
+    line.points = points;
+    pz_feature_curves *curves = NULL;
+    REQUIRE_OK(pz_feature_curves_snap(pattern, &line, 1, 0, &curves, &ctx), ctx);
+    pz_topology_free(&topology);
+    return curves;
+}
+
+static void check_wirewarp(const char *name, const pz_pattern *pattern, const pz_feature_curves *features)
+{
+    size_t bytes = (size_t)pattern->mesh->vertex_count * 2 * sizeof(double);
+    double *once = new_uv(pattern), *solved = new_uv(pattern);
+    pz_wirewarp_solver *solver = NULL;
+    REQUIRE_OK(pz_wirewarp_setup(pattern, features, &solver, &ctx), ctx);
+    pz_wirewarp_options variants[4] = {{.scheme = 0}, {.scheme = 1}, {.interior = 1}, {.scheme = 0}};
+    for (int i = 0; i < 4; ++i) {
+        pz_wirewarp_result a, b;
+        REQUIRE_OK(pz_param_wirewarp(pattern, &variants[i], features, once, &a, &ctx), ctx);
+        REQUIRE_OK(pz_wirewarp_solve(solver, &variants[i], solved, &b, &ctx), ctx);
+        CHECK(memcmp(once, solved, bytes) == 0, "%s, scheme %d, interior %d (solve %d of one set-up): the uv of "
+              "pz_param_wirewarp byte for byte", name, variants[i].scheme, variants[i].interior, i + 1);
+        CHECK(a.iterations == b.iterations && a.constraint_residual == b.constraint_residual &&
+                  a.flipped_triangles == b.flipped_triangles && a.e_len_wires == b.e_len_wires &&
+                  a.wire_patch_count == b.wire_patch_count,
+              "%s, solve %d: the result of pz_param_wirewarp (%d patches, %d iterations, E_len %g)", name, i + 1,
+              b.wire_patch_count, b.iterations, b.e_len_wires);
+    }
+    pz_wirewarp_solver_free(&solver);
+    CHECK(solver == NULL, "%s: the freed solver pointer is cleared", name);
+    free(once);
+    free(solved);
+}
+
+static void test_wirewarp(void)
+{
+    pz_pattern *hemisphere = generated_pattern(PZ_SHAPE_HEMISPHERE, 1500, 0, 0);
+    check_wirewarp("wirewarp, hemisphere", hemisphere, NULL);
+    pz_pattern *bodice = generated_pattern(PZ_SHAPE_BODICE, 3000, 0, 1);
+    pz_feature_curves *curves = middle_curve(bodice);
+    REQUIRE(curves->curve_count == 1, "one feature curve snapped");
+    check_wirewarp("wirewarp, bodice with a key curve", bodice, curves);
+    pz_wirewarp_solver *solver = (pz_wirewarp_solver *)&ctx;
+    CHECK(pz_wirewarp_setup(NULL, NULL, &solver, &ctx) == PZ_ERR_USAGE && solver == NULL,
+          "wirewarp: no pattern: usage error, *out NULL");
+    CHECK(pz_wirewarp_setup(bodice, NULL, NULL, &ctx) == PZ_ERR_USAGE, "wirewarp: no solver pointer: usage error");
+    pz_feature_curves_free(&curves);
+    pz_pattern_free(&bodice);
+    pz_pattern_free(&hemisphere);
+}
+
 int main(void)
 {
     pz_ctx_init(&ctx);
@@ -185,5 +269,6 @@ int main(void)
     test_bodice();
     test_cancel();
     test_usage();
+    test_wirewarp();
     return test_finish();
 }
