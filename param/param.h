@@ -10,7 +10,8 @@
  *
  *   pz_pattern_build   panels + seams/darts  -> pz_pattern (cut mesh, seams)
  *   pz_param_lscm      one disk              -> initial UVs (Levy 2002)
- *   pz_param_textile   a whole pattern       -> UVs (pietroni2022 Sec. 4.3)
+ *   pz_param_textile   a whole pattern       -> UVs (pietroni2022 Sec. 4.3);
+ *                      also as pz_textile_setup then pz_textile_solve
  *   pz_metrics_compute a pattern + UVs       -> per-triangle/panel/seam figures
  *
  * Conventions are those of mesh/mesh.h (status, ctx last, ownership).

@@ -104,9 +104,10 @@
  * options is made once by pz_textile_setup and never written afterwards:
  * the LSCM start, frames, areas, the faces and vertices of each panel, the
  * seam segments, outlines, the CSC pattern of every panel's two systems and
- * their symbolic analysis (the fill-reducing ordering, the costliest part of
- * CHOLMOD's set-up after the numbers). pz_textile_solve allocates the rest
- * (the local step's output, weights the strain goal changes, the numeric
+ * their symbolic analysis (the fill-reducing ordering and the factor's
+ * structure, which depend on the sparsity pattern only: from 8,000 unknowns
+ * on also on the vertex positions, fixed too). pz_textile_solve allocates
+ * the rest (the local step's output, weights the strain goal changes, the numeric
  * factors, copied from the symbolic analysis) and frees it when done, so a
  * kept solver holds only its set-up and every solve starts from the same
  * state: the same uv, byte for byte, as a fresh pz_param_textile.
