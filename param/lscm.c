@@ -40,9 +40,8 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
-#include "param.h"
+#include "param/internal.h"
 
-#include <cholmod.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -316,7 +315,7 @@ static int nested_dissection(const int *colp, const int *rows, int32_t n, const 
  * -- else, or when vertex_of is NULL or memory is short, CHOLMOD's default
  * (AMD, METIS when that fills badly: its analysis alone took 1.2-1.7 s at
  * 200K faces). Returns the symbolic factor or NULL (common->status says
- * why). Shared with param/textile.c.
+ * why). Shared with the textile set-up (param/textile_setup.c).
  */
 #define ND_MIN_UNKNOWNS 8000
 cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions, const int32_t *vertex_of,
@@ -371,7 +370,7 @@ cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions
  * thread's max-active-levels ICV is 0 for the call (every region inside runs
  * as a team of one; the ICV belongs to the calling task's data environment,
  * so nothing else in the process is affected) and restored afterwards. The
- * factor does not depend on the team size. Shared with param/textile.c.
+ * factor does not depend on the team size. Shared with the textile global step (param/textile_global.c).
  * Returns cholmod_factorize's result (common->status says why it failed).
  */
 int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_common *common)

@@ -10,7 +10,8 @@
  *
  *   pz_pattern_build   panels + seams/darts  -> pz_pattern (cut mesh, seams)
  *   pz_param_lscm      one disk              -> initial UVs (Levy 2002)
- *   pz_param_textile   a whole pattern       -> UVs (pietroni2022 Sec. 4.3)
+ *   pz_param_textile   a whole pattern       -> UVs (pietroni2022 Sec. 4.3);
+ *                      also as pz_textile_setup then pz_textile_solve
  *   pz_metrics_compute a pattern + UVs       -> per-triangle/panel/seam figures
  *
  * Conventions are those of mesh/mesh.h (status, ctx last, ownership).
@@ -196,6 +197,51 @@ typedef struct pz_textile_result {
 pz_status pz_param_textile(const pz_pattern *pattern, const pz_textile_options *options, double *uv,
                            pz_textile_result *result, pz_ctx *ctx);
 
+/**
+ * The textile parameterization in two parts, set-up then solve (as libigl's
+ * arap_precomputation then arap_solve): pz_param_textile is exactly
+ * pz_textile_setup, pz_textile_solve, pz_textile_solver_free.
+ *
+ * The set-up holds everything that depends only on the pattern and the
+ * options: the checks, the LSCM start, each face's 3D frames, the seam
+ * segments and outlines, and per panel the sparsity pattern of its two
+ * coordinate systems with CHOLMOD's symbolic analysis (the fill-reducing
+ * ordering). A solve runs the iterations from the LSCM start, making only
+ * numeric factorizations (copies of the set-up's analysis), and gives the
+ * same uv and result, byte for byte, every time: a caller that flattens the
+ * same pattern again (the segmentation evaluating a panel it has seen)
+ * keeps the solver and pays the iterations only. docs/param.md, "Set-up and
+ * solve".
+ */
+typedef struct pz_textile_solver pz_textile_solver;
+
+/**
+ * Sets up the textile parameterization of `pattern` with `options` (NULL =
+ * defaults; copied, including on_iteration and user, which later solves
+ * call). The solver keeps a pointer to `pattern`, which must stay unchanged
+ * and outlive it. *out: the caller's, freed with pz_textile_solver_free
+ * (NULL on error). Errors as pz_param_textile's set-up: PZ_ERR_USAGE
+ * (negative weights), PZ_ERR_DATA (a panel that is not a disk, a seam vertex
+ * out of range), PZ_ERR_NOMEM, PZ_ERR_CANCELLED (after the LSCM start).
+ */
+pz_status pz_textile_setup(const pz_pattern *pattern, const pz_textile_options *options, pz_textile_solver **out,
+                           pz_ctx *ctx);
+
+/**
+ * One textile solve with a set-up solver: uv (pattern->mesh->vertex_count x
+ * 2, written, mm) and result (may be NULL; written on success) as
+ * pz_param_textile gives them; result->init_ms is the set-up's time. The
+ * memory of the solve is freed before returning: between solves the solver
+ * holds its set-up only. PZ_ERR_CANCELLED between two iterations when
+ * ctx->cancel is set (uv then holds the last accepted iterate, not laid
+ * out). One solver serves one thread at a time; separate solvers may solve
+ * in parallel.
+ */
+pz_status pz_textile_solve(pz_textile_solver *solver, double *uv, pz_textile_result *result, pz_ctx *ctx);
+
+/** Frees the solver and sets *solver to NULL (accepts NULL and *solver == NULL). */
+void pz_textile_solver_free(pz_textile_solver **solver);
+
 /** LSCM only, panel by panel (the `--backend lscm` path), grain-oriented. */
 pz_status pz_param_lscm_pattern(const pz_pattern *pattern, const double grain[3], double *uv, pz_ctx *ctx);
 
@@ -306,6 +352,40 @@ typedef struct pz_wirewarp_result {
 pz_status pz_param_wirewarp(const pz_pattern *pattern, const pz_wirewarp_options *options,
                             const pz_feature_curves *features, double *uv, pz_wirewarp_result *result,
                             pz_ctx *ctx);
+
+/**
+ * WireWarping in two parts: pz_param_wirewarp is exactly pz_wirewarp_setup,
+ * pz_wirewarp_solve, pz_wirewarp_solver_free. The set-up builds the wires,
+ * wire-patches and wire-nodes of the pattern and `features` (which depend on
+ * nothing else); each solve takes its own options (scheme, interior weights,
+ * iterations, grain) and keeps the interior system's CHOLMOD symbolic
+ * analysis for the next interior solve with the same wires. Solving twice
+ * with the same options gives the same uv.
+ */
+typedef struct pz_wirewarp_solver pz_wirewarp_solver;
+
+/**
+ * Sets up WireWarping of `pattern` along `features` (may be NULL; copied).
+ * The solver keeps a pointer to `pattern`, which must stay unchanged and
+ * outlive it. *out: the caller's, freed with pz_wirewarp_solver_free (NULL
+ * on error). Errors as pz_param_wirewarp's structural ones (PZ_ERR_DATA for
+ * a wire-patch that is not a disk or a curve off the mesh edges).
+ */
+pz_status pz_wirewarp_setup(const pz_pattern *pattern, const pz_feature_curves *features, pz_wirewarp_solver **out,
+                            pz_ctx *ctx);
+
+/**
+ * One WireWarping with a set-up solver: uv and result (may be NULL) as
+ * pz_param_wirewarp gives them with these options (may be NULL). Trimming
+ * dangling curve ends (docs/wirewarp.md) builds the trimmed wires for that
+ * solve only. PZ_ERR_CANCELLED between steps when ctx->cancel is set. One
+ * solver serves one thread at a time.
+ */
+pz_status pz_wirewarp_solve(pz_wirewarp_solver *solver, const pz_wirewarp_options *options, double *uv,
+                            pz_wirewarp_result *result, pz_ctx *ctx);
+
+/** Frees the solver and sets *solver to NULL (accepts NULL and *solver == NULL). */
+void pz_wirewarp_solver_free(pz_wirewarp_solver **solver);
 
 /* ------------------------------------------------------------------------ */
 /* Metrics                                                                   */

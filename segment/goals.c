@@ -74,13 +74,38 @@ typedef struct panel_walk {
     int32_t *labelled;     /* face_count: the faces given a neighbour label, to unset them when done */
     int32_t labelled_count;
     int32_t next_label;
+    seg_goal_scratch *scratch; /* kept panels (kept_flattening) */
 } panel_walk;
 
+/* A panel flattened before, kept with its textile set-up (pz_textile_setup) for the next evaluation of the
+ * same panel (kept_flattening). */
+typedef struct kept_panel {
+    int32_t *key;                /* its faces in order, then its slits (panel corner indices); NULL: a free slot */
+    int32_t key_length, face_count;
+    pz_pattern *pattern;
+    pz_textile_solver *solver;
+    uint64_t used;               /* last use (eviction) */
+} kept_panel;
+
+/* At most this many kept panels per scratch, of at most KEPT_FACE_RATIO x the mesh's faces and KEPT_FACES
+ * faces in all (a kept panel takes about 270 bytes per face: 100,000 faces are 27 MB per thread). On the
+ * shared garments a panel comes back within 4x the mesh's faces of other evaluations; on the 50K bodice
+ * (one thread) the 100,000 faces save 36 of its 46 repeated analyses. */
+#define KEPT_PANELS 64
+#define KEPT_FACE_RATIO 4
+#define KEPT_FACES 100000
+
 /* Face-indexed arrays of panel_walk, all -1 between evaluations (local, neighbour) so that an evaluation
- * costs O(its panel and neighbours) rather than O(F) to initialize them. One per thread. */
+ * costs O(its panel and neighbours) rather than O(F) to initialize them. One per thread. The kept
+ * panels belong to one mesh and one set of goal options (those of their first use: others clear them). */
 struct seg_goal_scratch {
     int32_t face_count;
     int32_t *local, *neighbour, *stack, *labelled;
+    kept_panel kept[KEPT_PANELS];
+    int64_t kept_faces;
+    uint64_t clock;
+    const pz_mesh *kept_mesh;
+    pz_goal_options kept_options;
 };
 
 seg_goal_scratch *seg_goal_scratch_new(int32_t face_count)
@@ -103,10 +128,20 @@ seg_goal_scratch *seg_goal_scratch_new(int32_t face_count)
     return scratch;
 }
 
+static void kept_clear(kept_panel *kept)
+{
+    free(kept->key);
+    pz_textile_solver_free(&kept->solver);
+    pz_pattern_free(&kept->pattern);
+    memset(kept, 0, sizeof *kept);
+}
+
 void seg_goal_scratch_free(seg_goal_scratch *scratch)
 {
     if (!scratch)
         return;
+    for (int i = 0; i < KEPT_PANELS; ++i)
+        kept_clear(&scratch->kept[i]);
     free(scratch->local);
     free(scratch->neighbour);
     free(scratch->stack);
@@ -550,22 +585,17 @@ static double min_dart_opening(const pz_pattern *pattern, const double *uv)
     return smallest;
 }
 
-/* Flattens the disk panel and measures strain and injectivity into out. */
-static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz_goal_result *out, pz_ctx *ctx)
+/* The textile set-up of the disk panel (panel_mesh, one-panel pattern, pz_textile_setup) into *kept. */
+static pz_status kept_setup(panel_walk *w, const pz_goal_options *options, kept_panel *kept, pz_ctx *ctx)
 {
     pz_mesh *mesh = NULL;
     uint8_t *slits = NULL;
-    pz_pattern *pattern = NULL;
-    pz_metrics *metrics = NULL;
-    double *uv = NULL;
     int32_t *zeros = calloc((size_t)w->count + 1, sizeof(int32_t));
     if (!zeros)
         return pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
     pz_status status = panel_mesh(w, &mesh, &slits, ctx);
     if (!status)
-        status = pz_pattern_build(mesh, zeros, slits, NULL, "panel", &pattern, ctx);
-    if (!status && !(uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double) + 1)))
-        status = pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
+        status = pz_pattern_build(mesh, zeros, slits, NULL, "panel", &kept->pattern, ctx);
     if (!status) {
         pz_textile_options textile = {0};
         textile.iterations = options->textile_iterations > 0 ? options->textile_iterations
@@ -574,9 +604,103 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
         textile.strain_limit = options->max_strain;
         textile.grain_given = 1;
         memcpy(textile.grain, options->grain, sizeof textile.grain);
-        textile.use_poses = pattern->mesh->pose_count > 0;
-        status = pz_param_textile(pattern, &textile, uv, NULL, ctx);
+        textile.use_poses = kept->pattern->mesh->pose_count > 0;
+        status = pz_textile_setup(kept->pattern, &textile, &kept->solver, ctx);
     }
+    free(slits);
+    pz_mesh_free(&mesh);
+    free(zeros);
+    return status;
+}
+
+/* The kept panel used least recently (a free slot first, unless occupied_only). */
+static int kept_least_used(const seg_goal_scratch *scratch, int occupied_only)
+{
+    int best = -1;
+    for (int i = 0; i < KEPT_PANELS; ++i)
+        if ((!occupied_only || scratch->kept[i].key) && (best < 0 || scratch->kept[i].used < scratch->kept[best].used))
+            best = i;
+    return best;
+}
+
+static void kept_drop(seg_goal_scratch *scratch, int slot)
+{
+    scratch->kept_faces -= scratch->kept[slot].face_count;
+    kept_clear(&scratch->kept[slot]);
+}
+
+/*
+ * The panel's flattening set-up: kept from an earlier evaluation of the same panel (the same faces in the
+ * same order and the same slits, so the same pattern and solver), else made and kept. The layout evaluates
+ * a panel again whenever its neighbours change (its cache is keyed on them: the corners depend on them),
+ * and the flattening, which does not, then costs its iterations only (docs/param.md, "Set-up and solve").
+ * *kept points into the scratch, or to `local` when the panel is not kept (the caller clears it).
+ */
+static pz_status kept_flattening(panel_walk *w, const pz_goal_options *options, kept_panel *local,
+                                 kept_panel **kept, pz_ctx *ctx)
+{
+    seg_goal_scratch *scratch = w->scratch;
+    const pz_goal_options *seen = &scratch->kept_options;
+    if (scratch->kept_mesh != w->mesh || seen->max_strain != options->max_strain ||
+        seen->textile_iterations != options->textile_iterations || memcmp(seen->grain, options->grain, sizeof seen->grain)) {
+        for (int i = 0; i < KEPT_PANELS; ++i)
+            kept_clear(&scratch->kept[i]);
+        scratch->kept_faces = 0;
+        scratch->kept_mesh = w->mesh;
+        scratch->kept_options = *options;
+    }
+    memset(local, 0, sizeof *local);
+    if (!(local->key = malloc((size_t)4 * w->count * sizeof(int32_t))))
+        return pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
+    memcpy(local->key, w->face_ids, (size_t)w->count * sizeof(int32_t));
+    local->key_length = local->face_count = w->count;
+    for (int32_t c = 0; c < 3 * w->count; ++c) {
+        int32_t h = 3 * w->face_ids[c / 3] + c % 3;
+        if (inner_twin(w, h, 0) >= 0 && w->edge_cut[w->topology->halfedge_edge[h]])
+            local->key[local->key_length++] = c;
+    }
+    for (int i = 0; i < KEPT_PANELS; ++i) {
+        kept_panel *k = &scratch->kept[i];
+        if (k->key && k->key_length == local->key_length &&
+            !memcmp(k->key, local->key, (size_t)k->key_length * sizeof(int32_t))) {
+            k->used = ++scratch->clock;
+            free(local->key);
+            local->key = NULL;
+            *kept = k;
+            return PZ_OK;
+        }
+    }
+    *kept = local;
+    pz_status status = kept_setup(w, options, local, ctx);
+    int64_t room = (int64_t)KEPT_FACE_RATIO * scratch->face_count;
+    room = room < KEPT_FACES ? room : KEPT_FACES;
+    if (status || local->face_count > room)
+        return status;
+    /* Keep it, giving up the least recently used panels until it fits. */
+    while (scratch->kept_faces + local->face_count > room)
+        kept_drop(scratch, kept_least_used(scratch, 1));
+    int slot = kept_least_used(scratch, 0);
+    kept_drop(scratch, slot);
+    scratch->kept[slot] = *local;
+    scratch->kept[slot].used = ++scratch->clock;
+    scratch->kept_faces += local->face_count;
+    memset(local, 0, sizeof *local);
+    *kept = &scratch->kept[slot];
+    return PZ_OK;
+}
+
+/* Flattens the disk panel and measures strain and injectivity into out. */
+static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz_goal_result *out, pz_ctx *ctx)
+{
+    pz_metrics *metrics = NULL;
+    double *uv = NULL;
+    kept_panel local, *kept = NULL;
+    pz_status status = kept_flattening(w, options, &local, &kept, ctx);
+    const pz_pattern *pattern = kept ? kept->pattern : NULL;
+    if (!status && !(uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double) + 1)))
+        status = pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
+    if (!status)
+        status = pz_textile_solve(kept->solver, uv, NULL, ctx);
     if (!status)
         status = pz_metrics_compute(pattern, uv, 0, NULL, &metrics, ctx);
     /* The strain is the worst over the rest pose and every extra pose (the flips do not depend on it). */
@@ -600,10 +724,8 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
     }
     pz_metrics_free(&metrics);
     free(uv);
-    pz_pattern_free(&pattern);
-    free(slits);
-    pz_mesh_free(&mesh);
-    free(zeros);
+    if (kept == &local)
+        kept_clear(&local);
     return status;
 }
 
@@ -651,6 +773,7 @@ pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint
     memset(&w, 0, sizeof w);
     w.mesh = mesh, w.topology = topology, w.edge_cut = edge_cut, w.face_ids = face_ids, w.face_panel = face_panel;
     w.neighbour = scratch->neighbour, w.stack = scratch->stack, w.labelled = scratch->labelled;
+    w.scratch = scratch;
     w.corner_root = malloc((size_t)3 * count * sizeof(int32_t));
     w.on_outline = malloc((size_t)3 * count);
     if (!w.corner_root || !w.on_outline) {

@@ -133,7 +133,7 @@ pz_status seg_insert_with_mirror(seg_layout *layout, const pz_trace_path *path, 
     pz_trace_path mirror;
     memset(&mirror, 0, sizeof mirror);
     pz_ctx local;
-    pz_ctx_init(&local);
+    pz_ctx_quiet(ctx, &local);
     if (pz_symmetry_mirror_path(&layout->symmetry, layout->graph, layout->mesh, layout->topology, path, &mirror,
                                 &local) == PZ_OK)
         status = add_path(layout, &mirror, 0, ctx);
@@ -203,7 +203,7 @@ static pz_status make_candidates(seg_layout *layout, pz_trace_paths *traced, seg
         c->usable = 1;
         if (s->found) {
             pz_ctx local;
-            pz_ctx_init(&local);
+            pz_ctx_quiet(ctx, &local);
             if (pz_symmetry_mirror_path(s, layout->graph, layout->mesh, layout->topology, &c->path, &c->mirror,
                                         &local) != PZ_OK) {
                 memset(&c->mirror, 0, sizeof c->mirror);

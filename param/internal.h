@@ -1,0 +1,63 @@
+/*
+ * param/internal.h -- what the flattening back-ends share and the library's
+ * users do not see: the local frame of a face, faces grouped by panel, the
+ * side-by-side layout of pieces, CHOLMOD's symbolic analysis with our
+ * fill-reducing ordering and its numeric factorization without an OpenMP
+ * team (all in param/lscm.c), and the geometric untangling of flipped faces
+ * (param/wirewarp_layout.c). Included by the .c files of param/ only; never by another
+ * stage (their interface is param/param.h).
+ *
+ * Each back-end that spans several files has its own private header on top
+ * of this one: param/textile_internal.h, param/wirewarp_internal.h,
+ * param/springmass_internal.h.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#ifndef PZ_PARAM_INTERNAL_H
+#define PZ_PARAM_INTERNAL_H
+
+#include "param/param.h"
+
+#include <cholmod.h>
+
+/* Local frame of face `face` (3 vertex ids into pos, n x 3): the 2D coordinates
+ * of corners 1 and 2 (corner 0 at the origin), written to local[0..2] = x1,
+ * x2, y2, and the frame axes e1, e2 (each 3). Returns the area (0 for a
+ * degenerate face). */
+double pz_param_face_frame(const double *pos, const int32_t *face, double local[3], double e1[3], double e2[3]);
+
+/* The rotation angle (radians, counter-clockwise) that turns the
+ * area-weighted projected grain of the given faces (face_ids may be NULL: the
+ * first face_count faces) onto +v; 0 when the grain is nearly normal to all
+ * of them. */
+double pz_param_grain_angle(const pz_mesh *mesh, const int32_t *face_ids, int32_t face_count, const double grain[3],
+                            const double *uv);
+
+/* Rotates the uv of the listed vertices by `angle` about their centroid. */
+void pz_param_rotate_vertices(const int32_t *vertex_ids, int32_t vertex_count, double angle, double *uv);
+
+/* Faces bucketed by panel: faces of panel p are (*order)[(*offsets)[p] ..
+ * (*offsets)[p+1] - 1]. Both arrays are the caller's to free. */
+pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int32_t **order, pz_ctx *ctx);
+
+/* Places the pieces on shelves with a 20 mm gap (param/lscm.c's header). */
+void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const int32_t *order, double *uv);
+
+/* CHOLMOD's symbolic analysis of a symmetric matrix whose unknown k sits at
+ * positions[3 * vertex_of[k]] (vertex_of may be NULL: CHOLMOD's default
+ * ordering): nested dissection or AMD, whichever fills less, from 8000
+ * unknowns on. The ordering depends on the sparsity pattern and, from 8000
+ * unknowns on, the positions: a factor analyzed once serves every matrix of
+ * that pattern. Returns the symbolic factor or NULL (common->status says why). */
+cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions, const int32_t *vertex_of,
+                                 cholmod_common *common);
+
+/* cholmod_factorize with no OpenMP team (param/lscm.c says why). */
+int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_common *common);
+
+/* Moves interior vertices of flipped faces into the kernel of their star
+ * (vertices with fixed[v] set never move; fixed may be NULL). Returns the
+ * moves made, -1 when out of memory. */
+int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
+
+#endif /* PZ_PARAM_INTERNAL_H */

@@ -1,0 +1,331 @@
+/*
+ * param/textile_global.c -- the global step of the textile parameterization:
+ * each panel's two coordinate systems assembled from the local step's
+ * shares, factorized when needed (numerically only: the symbolic analysis
+ * is the set-up's) and solved with one step of preconditioned conjugate
+ * gradients or directly; and the projection that keeps a step from turning
+ * the panels. The design: param/textile_internal.h.
+ *
+ * SPDX-License-Identifier: GPL-3.0-or-later
+ */
+#include "param/textile_internal.h"
+
+#include <math.h>
+#include <omp.h>
+#include <string.h>
+
+/* ------------------------------------------------------------------------ */
+/* Global step                                                               */
+/* ------------------------------------------------------------------------ */
+
+/* y = A x for the upper-stored symmetric matrix. */
+static void symmetric_product(const cholmod_sparse *matrix, const double *x, double *y)
+{
+    const int *colp = matrix->p, *rows = matrix->i;
+    const double *values = matrix->x;
+    size_t n = matrix->ncol;
+    memset(y, 0, n * sizeof(double));
+    for (size_t j = 0; j < n; ++j) {
+        double xj = x[j], sum = 0;
+        int end = colp[j + 1] - 1; /* the diagonal */
+        for (int e = colp[j]; e < end; ++e) {
+            y[rows[e]] += values[e] * xj;
+            sum += values[e] * x[rows[e]];
+        }
+        y[j] += sum + values[end] * xj;
+    }
+}
+
+/* z = A^-1 g with the coordinate's current preconditioner, g = its
+ * textile_grain_gradient, for textile_project_grain_turn (the residual vector is free
+ * outside pcg_solve). */
+static int grain_response(const panel_system *system, coordinate_solver *solver, cholmod_factor *factor)
+{
+    memcpy(solver->residual->x, solver->grain_gradient, (size_t)system->vertex_count * sizeof(double));
+    if (!cholmod_solve2(CHOLMOD_A, factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
+                        &solver->work_e, &solver->common))
+        return solver->common.status ? solver->common.status : -1;
+    memcpy(solver->grain_response, solver->solution->x, (size_t)system->vertex_count * sizeof(double));
+    solver->response_ready = 1;
+    return CHOLMOD_OK;
+}
+
+/*
+ * The global step's solve: one step of conjugate gradients preconditioned
+ * with the factor of an earlier iteration's matrix, from the current
+ * coordinates (x + alpha z, z = M^-1 (b - A x), alpha minimizing the
+ * quadratic along z). The matrix changes only through the stretch terms, so
+ * the old factor is nearly A^-1 and one step takes most of the way; the
+ * global step need not be exact (the next local step changes the matrix
+ * again, and the line search checks every step): measured, one step per
+ * iteration reached the same energies as solving to 1e-2 (2-4 steps) in
+ * the same number of iterations (docs/param.md, "Speed"). Nothing is done
+ * when the residual is already below PCG_TOLERANCE of the right-hand side
+ * or r^T M^-1 r below PCG_MODEL_TOLERANCE of x^T A x. The factor is
+ * refreshed for the next iteration when, at the rate of this step, reducing
+ * the residual by PCG_REDUCTION would take more than half of what one
+ * factorization costs in steps (max_steps, from flop counts: about 7 at 1K
+ * vertices, 65 at 100K, clamped to 4..60): it has gone stale. A step that
+ * does not lower the residual returns 0 (uv untouched; solve_coordinate
+ * factorizes and solves directly, and when that keeps happening -- large,
+ * uneven distortion: the face scan -- backs off from PCG exponentially, 1,
+ * 2, 4, ... direct solves before the next try).
+ */
+#define PCG_TOLERANCE 1e-8
+#define PCG_REDUCTION 1e-2
+#define PCG_MODEL_TOLERANCE 1e-9
+static int pcg_solve(const panel_system *system, coordinate_solver *solver, cholmod_factor *factor, int k, double *uv)
+{
+    int32_t n = system->vertex_count;
+    double *b = solver->rhs->x, *r = solver->residual->x, *ap = solver->product;
+    /* The iterate lives in uv's column k; gather it into `current`. */
+    double *current = solver->current;
+    for (int32_t l = 0; l < n; ++l)
+        current[l] = uv[2 * system->vertices[l] + k];
+    symmetric_product(solver->matrix, current, ap);
+    double b_norm = 0, r_norm = 0, scale = 0;
+    for (int32_t l = 0; l < n; ++l) {
+        r[l] = b[l] - ap[l];
+        b_norm += b[l] * b[l];
+        r_norm += r[l] * r[l];
+        scale += current[l] * ap[l];
+    }
+    if (r_norm <= PCG_TOLERANCE * PCG_TOLERANCE * fmax(b_norm, 1e-300))
+        return 1;
+    if (!cholmod_solve2(CHOLMOD_A, factor, solver->residual, NULL, &solver->solution, NULL, &solver->work_y,
+                        &solver->work_e, &solver->common))
+        return 0;
+    const double *z = solver->solution->x;
+    double rz = 0;
+    for (int32_t l = 0; l < n; ++l)
+        rz += r[l] * z[l];
+    /* r^T M^-1 r estimates what the quadratic can still decrease; x^T A x
+     * is its scale (the size of the targets). */
+    if (rz <= PCG_MODEL_TOLERANCE * scale)
+        return 1;
+    symmetric_product(solver->matrix, z, ap);
+    double zaz = 0;
+    for (int32_t l = 0; l < n; ++l)
+        zaz += z[l] * ap[l];
+    if (!(zaz > 0))
+        return 0;
+    double alpha = rz / zaz, new_norm = 0;
+    for (int32_t l = 0; l < n; ++l) {
+        double residual = r[l] - alpha * ap[l];
+        new_norm += residual * residual;
+    }
+    if (!(new_norm < r_norm))
+        return 0;
+    /* Steps to PCG_REDUCTION at this rate (squared norms). */
+    if (2 * log(PCG_REDUCTION) / log(new_norm / r_norm) > solver->max_steps / 2)
+        solver->refactor = 1;
+    for (int32_t l = 0; l < n; ++l)
+        uv[2 * system->vertices[l] + k] = current[l] + alpha * z[l];
+    return 1;
+}
+
+/* Assembles coordinate k's system of one panel from the local step's face
+ * shares, the seam segments and the seam and dart pulls at uv. */
+static void assemble_coordinate(const textile_state *state, int32_t panel, int k, const double *uv)
+{
+    const pz_mesh *mesh = state->pattern->mesh;
+    panel_system *system = &state->panels[panel];
+    coordinate_solver *solver = &system->solver[k];
+    cholmod_sparse *matrix = solver->matrix;
+    double *values = matrix->x, *rhs = solver->rhs->x;
+    const int *colp = matrix->p;
+    int32_t n = system->vertex_count;
+    memset(values, 0, (size_t)colp[n] * sizeof(double));
+    memset(rhs, 0, (size_t)n * sizeof(double));
+    const int32_t *faces = state->order + state->offsets[panel];
+    int32_t count = state->offsets[panel + 1] - state->offsets[panel];
+    for (int32_t i = 0; i < count; ++i) {
+        int32_t f = faces[i];
+        const int32_t *face = mesh->faces + 3 * f;
+        const face_terms *terms = &state->terms[f];
+        const int32_t *slot = system->slots + 6 * i;
+        for (int e = 0; e < 6; ++e)
+            values[slot[e]] += terms->value[k][e];
+        for (int a = 0; a < 3; ++a)
+            rhs[state->vertex_local[face[a]]] += terms->rhs[k][a];
+    }
+    for (int32_t i = 0; i < system->segment_count; ++i) {
+        int32_t g = system->segment_ids[i];
+        const int32_t *ends = state->segment_ends + 2 * g;
+        int32_t a = state->vertex_local[ends[0]], b = state->vertex_local[ends[1]];
+        if (a == b || (state->seams_open && g < state->seam_segment_end))
+            continue;
+        double w = state->segment_weight[g], t = w * state->segment_target[2 * g + k];
+        values[system->segment_slots[i]] -= w;
+        values[colp[a + 1] - 1] += w;
+        values[colp[b + 1] - 1] += w;
+        rhs[b] += t;
+        rhs[a] -= t;
+    }
+    double reg = state->regularization;
+    for (int32_t l = 0; l < n; ++l) {
+        int32_t v = system->vertices[l];
+        values[colp[l + 1] - 1] += state->pull_weight[v] + reg; /* the diagonal ends each upper column */
+        rhs[l] += state->pull_target[2 * v + k] + reg * uv[2 * v + k];
+    }
+    if (state->project_grain)
+        textile_grain_gradient(state, panel, k, uv, solver->grain_gradient);
+}
+
+/*
+ * Factorizes coordinate k's matrix when this iteration needs it: the first
+ * time (u only: v borrows u's factor until it needs its own), when the
+ * factor went stale or a PCG step failed (pcg_solve), and during the
+ * back-off after failures. Returns a CHOLMOD status.
+ */
+static int factorize_when_needed(panel_system *system, int k)
+{
+    coordinate_solver *solver = &system->solver[k];
+    int needed = solver->direct_runs > 0 || solver->refactor || (!solver->factored && !solver->borrowing);
+    if (!needed)
+        return CHOLMOD_OK;
+    if (solver->direct_runs > 0)
+        --solver->direct_runs;
+    pz_param_factorize(solver->matrix, solver->factor, &solver->common);
+    if (solver->common.status != CHOLMOD_OK)
+        return solver->common.status ? solver->common.status : -1;
+    solver->factored = solver->fresh = 1;
+    solver->refactor = solver->borrowing = 0;
+    solver->response_ready = 0;
+    if (k == 0 && system->solver[1].borrowing)
+        system->solver[1].response_ready = 0;
+    return CHOLMOD_OK;
+}
+
+/*
+ * Solves coordinate k of one panel and writes it into uv: directly with a
+ * factor made this iteration, otherwise one preconditioned step
+ * (pcg_solve). A step that fails leaves uv alone and marks the coordinate
+ * `failed` (textile_global_step then factorizes and solves it directly), and asks
+ * for factorizations in the next iterations too: 1, 2, 4, ... 16 in a row
+ * on repeated failures (large, uneven distortion: the face scan), so a
+ * useless PCG costs at most about what it meant to save. Factors are only
+ * read here, so v can borrow u's while both are solved in parallel.
+ * Returns a CHOLMOD status.
+ */
+static int solve_coordinate(const textile_state *state, int32_t panel, int k, double *uv)
+{
+    panel_system *system = &state->panels[panel];
+    coordinate_solver *solver = &system->solver[k];
+    cholmod_factor *factor = solver->borrowing ? system->solver[0].factor : solver->factor;
+    if (solver->fresh) {
+        solver->fresh = 0;
+        if (!cholmod_solve2(CHOLMOD_A, factor, solver->rhs, NULL, &solver->solution, NULL, &solver->work_y,
+                            &solver->work_e, &solver->common))
+            return solver->common.status ? solver->common.status : -1;
+        const double *x = solver->solution->x;
+        for (int32_t l = 0; l < system->vertex_count; ++l)
+            uv[2 * system->vertices[l] + k] = x[l];
+    } else if (pcg_solve(system, solver, factor, k, uv)) {
+        solver->backoff = 1;
+    } else {
+        solver->failed = 1;
+        solver->direct_runs = solver->backoff;
+        solver->backoff = solver->backoff < 16 ? 2 * solver->backoff : 16;
+        return CHOLMOD_OK;
+    }
+    if (state->project_grain && !solver->response_ready)
+        return grain_response(system, solver, factor);
+    return CHOLMOD_OK;
+}
+
+/* Records the first failing panel of a parallel phase. */
+static void note_failure(int status, int32_t panel, int *failed_status, int32_t *failed_panel)
+{
+    if (status == CHOLMOD_OK)
+        return;
+#pragma omp critical(pz_textile_failure)
+    if (*failed_panel < 0 || panel < *failed_panel) {
+        *failed_panel = panel;
+        *failed_status = status;
+    }
+}
+
+/*
+ * The global step in three parallel phases over the 2 x panels coordinate
+ * systems: assembly, the factorizations this iteration needs, the solves.
+ * The local step is complete before any coordinate is overwritten, each
+ * task writes only its own panel's coordinate, and no factor changes while
+ * the solves read them: no races, and the same result for any thread count.
+ */
+pz_status textile_global_step(textile_state *state, double *uv, pz_ctx *ctx)
+{
+    int32_t tasks = 2 * state->pattern->panel_count;
+    int failed_status = CHOLMOD_OK;
+    int32_t failed_panel = -1;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+    for (int32_t task = 0; task < tasks; ++task)
+        assemble_coordinate(state, task / 2, task % 2, uv);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+    for (int32_t task = 0; task < tasks; ++task)
+        note_failure(factorize_when_needed(&state->panels[task / 2], task % 2), task / 2, &failed_status,
+                     &failed_panel);
+    int retry = 0;
+    if (failed_panel < 0) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel) reduction(| : retry)
+        for (int32_t task = 0; task < tasks; ++task) {
+            note_failure(solve_coordinate(state, task / 2, task % 2, uv), task / 2, &failed_status, &failed_panel);
+            retry |= state->panels[task / 2].solver[task % 2].failed;
+        }
+    }
+    /* PCG steps that failed: factorize and solve directly, after every
+     * solve that might read the factor is done. */
+    if (retry && failed_panel < 0) {
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->parallel)
+        for (int32_t task = 0; task < tasks; ++task) {
+            panel_system *system = &state->panels[task / 2];
+            if (!system->solver[task % 2].failed)
+                continue;
+            system->solver[task % 2].failed = 0;
+            int st = factorize_when_needed(system, task % 2);
+            note_failure(st ? st : solve_coordinate(state, task / 2, task % 2, uv), task / 2, &failed_status,
+                         &failed_panel);
+        }
+    }
+    if (failed_panel < 0)
+        return PZ_OK;
+    if (failed_status == CHOLMOD_OUT_OF_MEMORY)
+        return pz_error(ctx, PZ_ERR_NOMEM, "textile: panel %d: out of memory", failed_panel);
+    return pz_error(ctx, PZ_ERR_INTERNAL, "textile: panel %d: the global step failed (CHOLMOD status %d)", failed_panel,
+                    failed_status);
+}
+
+/*
+ * Grain-constrained steps (docs/param.md). Eq. 10 is not invariant under
+ * rotation, so the global step turns each panel a little towards the
+ * rotation its stretch terms prefer, and textile_align_grain turns it back: near
+ * convergence that raised the energy of every full step (the fixed point of
+ * step-then-align is not a minimum of Eq. 10 among aligned patterns) and the
+ * iteration stalled in backtracking. So the step d = new - old of each panel
+ * is replaced by the minimizer of the global step's quadratic under the
+ * linearized constraint g . d = 0 (g: the gradient of the panel's grain angle,
+ * textile_grain_gradient, both coordinates): d - (g . d / g . z) z with z = A^-1 g,
+ * taken from the last factorization (a stale z only makes the projected step
+ * a little less than optimal; g . d = 0 holds exactly). The step then turns
+ * the panel only to second order, and the iteration's fixed points are the
+ * stationary points of Eq. 10 among aligned patterns.
+ */
+void textile_project_grain_turn(const textile_state *state, const double *previous, double *uv)
+{
+#pragma omp parallel for schedule(dynamic, 1) num_threads(state->threads) if (state->across_panels)
+    for (int32_t p = 0; p < state->pattern->panel_count; ++p) {
+        const panel_system *system = &state->panels[p];
+        double turn = 0, response = 0;
+        for (int k = 0; k < 2; ++k)
+            for (int32_t l = 0; l < system->vertex_count; ++l) {
+                size_t i = 2 * (size_t)system->vertices[l] + k;
+                turn += system->solver[k].grain_gradient[l] * (uv[i] - previous[i]);
+                response += system->solver[k].grain_gradient[l] * system->solver[k].grain_response[l];
+            }
+        if (!(response > 0))
+            continue;
+        for (int k = 0; k < 2; ++k)
+            for (int32_t l = 0; l < system->vertex_count; ++l)
+                uv[2 * (size_t)system->vertices[l] + k] -= turn / response * system->solver[k].grain_response[l];
+    }
+}
