@@ -85,6 +85,10 @@ typedef struct kept_panel {
     pz_pattern *pattern;
     pz_textile_solver *solver;
     uint64_t used;               /* last use (eviction) */
+    /* The figures of its flattening, once measured: the same faces and slits flatten the same way (the
+     * flattening does not see the neighbours), so a later evaluation takes them instead of solving again. */
+    int measured;
+    pz_goal_result figures;
 } kept_panel;
 
 /* At most this many kept panels per scratch, of at most KEPT_FACE_RATIO x the mesh's faces and KEPT_FACES
@@ -697,6 +701,15 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
     kept_panel local, *kept = NULL;
     pz_status status = kept_flattening(w, options, &local, &kept, ctx);
     const pz_pattern *pattern = kept ? kept->pattern : NULL;
+    if (!status && kept->measured) {
+        out->darts = kept->figures.darts;
+        out->min_dart_opening_deg = kept->figures.min_dart_opening_deg;
+        out->max_abs_strain = kept->figures.max_abs_strain;
+        out->flipped_triangles = kept->figures.flipped_triangles;
+        out->boundary_self_intersections = kept->figures.boundary_self_intersections;
+        out->failures = pz_goal_judge(options, out);
+        return PZ_OK;
+    }
     if (!status && !(uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double) + 1)))
         status = pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
     if (!status)
@@ -721,6 +734,10 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
             out->boundary_self_intersections += metrics->panels[p].boundary_self_intersections;
         }
         out->failures = pz_goal_judge(options, out);
+        if (kept != &local) {
+            kept->measured = 1;
+            kept->figures = *out;
+        }
     }
     pz_metrics_free(&metrics);
     free(uv);
