@@ -459,10 +459,11 @@ static int run_task(const pz_trace_graph *graph, const pz_mesh *mesh, const pz_t
     return 1;
 }
 
-/* Runs every task in parallel, each into its own slot. Returns 0 when out of memory. */
+/* Runs every task in parallel, each into its own slot. Returns 0 when out of memory. Once the context is
+ * cancelled the tasks not started are skipped (the flag is only read here; the caller says cancelled). */
 static int run_tasks(const pz_trace_graph *graph, const pz_mesh *mesh, const pz_topology *topology,
                      const search_task *tasks, int32_t task_count, const candidate_settings *settings,
-                     pz_trace_path *slots)
+                     pz_trace_path *slots, const pz_ctx *ctx)
 {
     int failed = 0;
 #pragma omp parallel num_threads(settings->threads)
@@ -475,6 +476,8 @@ static int run_tasks(const pz_trace_graph *graph, const pz_mesh *mesh, const pz_
         }
 #pragma omp for schedule(dynamic, 1)
         for (int32_t i = 0; i < task_count; ++i) {
+            if (pz_cancelled(ctx))
+                continue;
             if (ok && !run_task(graph, mesh, topology, &tasks[i], settings, &s, &slots[i])) {
 #pragma omp atomic write
                 failed = 1;
@@ -581,14 +584,18 @@ pz_status pz_trace_candidates(const pz_trace_graph *graph, const pz_mesh *mesh, 
     if (ok) {
         task_count = plan_tasks(graph, mesh, topology, settings.interior_sources, settings.border_sources, tasks,
                                 vertex_scratch, gap);
-        ok = run_tasks(graph, mesh, topology, tasks, task_count, &settings, slots) &&
-             gather(slots, task_count, mesh->vertex_count, paths);
+        ok = run_tasks(graph, mesh, topology, tasks, task_count, &settings, slots, ctx);
+        if (ok && (status = pz_check_cancel(ctx, "trace")) != PZ_OK)
+            ok = 0;
+        ok = ok && gather(slots, task_count, mesh->vertex_count, paths);
     }
     for (int32_t i = 0; slots && i < task_count; ++i)
         pz_trace_path_clear(&slots[i]);
     free(tasks), free(vertex_scratch), free(gap), free(slots);
     if (!ok) {
         pz_trace_paths_free(&paths);
+        if (status == PZ_ERR_CANCELLED)
+            return status;
         return pz_error(ctx, PZ_ERR_NOMEM, "trace: out of memory tracing candidates on %d vertices",
                         (int)mesh->vertex_count);
     }

@@ -143,7 +143,9 @@ typedef struct pz_trace_candidate_options {
  * smoothed; duplicates (same vertex set) dropped; sorted by cost then by
  * first vertex, so the order is deterministic. A closed mesh gets loops only,
  * a mesh without interior vertices border paths only. options may be NULL.
- * Returns PZ_OK with zero paths when none can be traced.
+ * Returns PZ_OK with zero paths when none can be traced. With ctx->cancel
+ * set, the tracing tasks not yet started are skipped and PZ_ERR_CANCELLED
+ * is returned (*out NULL).
  */
 pz_status pz_trace_candidates(const pz_trace_graph *graph, const pz_mesh *mesh, const pz_topology *topology,
                               const pz_trace_candidate_options *options, pz_trace_paths **out, pz_ctx *ctx);

@@ -210,6 +210,14 @@ static void test_graph_options(const fixture *f)
     pz_trace_paths *paths = NULL;
     CHECK(pz_trace_candidates(f->graph, f->mesh, f->topology, &negative, &paths, &ctx) == PZ_ERR_USAGE && !paths,
           "negative source count accepted");
+    /* Cancelled: no paths, the status says so (the tracing tasks not started are skipped). */
+    volatile int stop = 1;
+    pz_ctx cancelled;
+    pz_ctx_quiet(&ctx, &cancelled);
+    cancelled.cancel = &stop;
+    CHECK(pz_trace_candidates(f->graph, f->mesh, f->topology, NULL, &paths, &cancelled) == PZ_ERR_CANCELLED &&
+              !paths && strstr(cancelled.error, "cancelled"),
+          "cancelled tracing: %s", cancelled.error);
 }
 
 /* ---------------------------------------------------------------- candidates */
