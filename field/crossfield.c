@@ -637,3 +637,8 @@ done:
     *out = field;
     return status;
 }
+
+void pz_field_options_default(pz_field_options *options)
+{
+    memset(options, 0, sizeof *options);
+}

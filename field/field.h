@@ -101,6 +101,9 @@ typedef struct pz_field_options {
     int use_poses;            /* 1: add the curvature of every mesh->poses (the CLI always does) */
 } pz_field_options;
 
+/** The defaults: every field zero, which means the defaults named above (defined once, in crossfield.c). */
+void pz_field_options_default(pz_field_options *options);
+
 /** What a face's cross is held to. */
 enum pz_field_constraint {
     PZ_FIELD_FREE = 0,        /* smooth + soft curvature alignment */

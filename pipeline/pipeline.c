@@ -64,6 +64,8 @@ void pz_run_options_default(pz_run_options *options)
     memset(options, 0, sizeof *options);
     options->units = PZ_UNITS_AUTO;
     options->prepare = 1;
+    pz_prepare_options_default(&options->prepare_options);
+    pz_field_options_default(&options->field);
     pz_goal_options_default(&options->goals);
     pz_segment_options_default(&options->segment);
     options->truing = 1;

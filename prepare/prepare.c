@@ -353,3 +353,8 @@ pz_status pz_prepare_write_seams(const pz_prepare_result *result, const char *pa
     fputs(result->seam_count ? "\n]}\n" : "]}\n", out.file);
     return pz_output_commit(&out, ctx);
 }
+
+void pz_prepare_options_default(pz_prepare_options *options)
+{
+    memset(options, 0, sizeof *options);
+}

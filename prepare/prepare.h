@@ -38,6 +38,9 @@ typedef struct pz_prepare_options {
     const char *name;          /* the input's name for messages; NULL = "mesh" */
 } pz_prepare_options;
 
+/** The defaults: every field zero, which means the defaults named above (defined once, in prepare/). */
+void pz_prepare_options_default(pz_prepare_options *options);
+
 /** The steps, in the order they run (pz_prepare_report.steps). */
 typedef enum pz_prepare_step_id {
     PZ_PREPARE_WELD = 0, PZ_PREPARE_REPAIR, PZ_PREPARE_FRAGMENTS, PZ_PREPARE_DECIMATE,
