@@ -318,11 +318,12 @@ report_checks "run --max-seam-mismatch 1e-9" exact-seams \
     "the reasons do not name the seams" "'seam mismatch' in d['summary']['goals_reasons']" \
     "the goal is not in the report" "d['segmentation']['max_seam_mismatch'] == 1e-9"
 
-# Ctrl-C (SIGINT) stops a run: exit 130, one line, nothing written. The 20K-face bodice takes seconds.
-"$BIN" generate bodice -o big.obj --faces 20000 --quiet
+# Ctrl-C (SIGINT) stops a run: exit 130, one line, nothing written. The signal goes once the field is
+# done (its note is on stderr), in the middle of the segmentation of a 50K-face bodice (seconds of work).
+"$BIN" generate bodice -o big.obj --faces 50000 --quiet
 "$BIN" run big.obj -o interrupted --prepare off >"$WORK/out" 2>"$WORK/err" &
 pid=$!
-sleep 1.5
+for _ in $(seq 600); do grep -q 'run: field:' "$WORK/err" && break; sleep 0.1; done
 kill -INT $pid
 wait $pid
 rc=$?
