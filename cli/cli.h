@@ -164,14 +164,6 @@ pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_m
                                  pz_units *units_used, pz_ctx *ctx);
 
 /**
- * pz_mesh_prepare on *mesh, but a run that fails must print its one error
- * line only: a copy is prepared quietly first, and only on success is the
- * preparation repeated aloud (it is deterministic) or, under --quiet, the
- * prepared copy kept in place of *mesh. On failure *mesh is unchanged.
- */
-pz_status pz_cli_prepare_quietly_first(pz_mesh **mesh, const char *path, unsigned repair_flags, pz_ctx *ctx);
-
-/**
  * Converts a freshly read mesh to millimetres with --units, or a guess.
  * *plausible (may be NULL) says whether the size then fits a garment.
  */
@@ -222,11 +214,6 @@ pz_status pz_cli_write_result(const pz_cli_args *args, pz_result *result, double
 void pz_cli_progress_begin(const pz_cli_args *args, pz_ctx *ctx);
 void pz_cli_progress_end(pz_ctx *ctx);
 
-/** Milliseconds between two pz_seconds() readings, rounded to microseconds. */
-double pz_cli_elapsed_ms(double start, double end);
-
-/** Rounds to `decimals` decimals so JSON numbers print short. */
-double pz_cli_round(double value, int decimals);
 
 /** A JSON array of 3 numbers, or NULL when out of memory. */
 cJSON *pz_cli_json_vec3(const double values[3], int decimals);

@@ -83,7 +83,7 @@ static pz_status parse_options(const pz_cli_args *args, pz_field_options *option
 static double figure_or_null(cJSON *object, const char *key, double value, int *failed)
 {
     cJSON *item = value < 0.0 ? cJSON_AddNullToObject(object, key)
-                              : cJSON_AddNumberToObject(object, key, pz_cli_round(value, 4));
+                              : cJSON_AddNumberToObject(object, key, pz_round(value, 4));
     if (!item)
         *failed = 1;
     return value;
@@ -106,17 +106,17 @@ static cJSON *build_report(const char *path, const pz_mesh *mesh, const pz_field
              cJSON_AddNumberToObject(root, "poses", mesh->pose_count) &&
              cJSON_AddNumberToObject(root, "scales", options->scale_count ? options->scale_count : PZ_FIELD_DEFAULT_SCALES) &&
              cJSON_AddNumberToObject(root, "smoothness", options->smoothness > 0.0 ? options->smoothness : PZ_FIELD_DEFAULT_SMOOTHNESS) &&
-             cJSON_AddNumberToObject(root, "mean_edge_mm", pz_cli_round(field->mean_edge_length, 4)) &&
+             cJSON_AddNumberToObject(root, "mean_edge_mm", pz_round(field->mean_edge_length, 4)) &&
              cJSON_AddNumberToObject(root, "boundary_faces", field->boundary_face_count) &&
              cJSON_AddNumberToObject(root, "sketch_faces", field->sketch_face_count);
     cJSON *timings = cJSON_AddObjectToObject(root, "timings_ms");
-    ok = ok && timings && cJSON_AddNumberToObject(timings, "read", pz_cli_round(times->read_ms, 3)) &&
-         cJSON_AddNumberToObject(timings, "curvature", pz_cli_round(field->curvature_ms, 3)) &&
-         cJSON_AddNumberToObject(timings, "sketch", pz_cli_round(field->sketch_ms, 3)) &&
-         cJSON_AddNumberToObject(timings, "solve", pz_cli_round(field->solve_ms, 3)) &&
-         cJSON_AddNumberToObject(timings, "singularities", pz_cli_round(field->singularity_ms, 3)) &&
-         cJSON_AddNumberToObject(timings, "write", pz_cli_round(times->write_ms, 3)) &&
-         cJSON_AddNumberToObject(timings, "total", pz_cli_round(times->total_ms, 3));
+    ok = ok && timings && cJSON_AddNumberToObject(timings, "read", pz_round(times->read_ms, 3)) &&
+         cJSON_AddNumberToObject(timings, "curvature", pz_round(field->curvature_ms, 3)) &&
+         cJSON_AddNumberToObject(timings, "sketch", pz_round(field->sketch_ms, 3)) &&
+         cJSON_AddNumberToObject(timings, "solve", pz_round(field->solve_ms, 3)) &&
+         cJSON_AddNumberToObject(timings, "singularities", pz_round(field->singularity_ms, 3)) &&
+         cJSON_AddNumberToObject(timings, "write", pz_round(times->write_ms, 3)) &&
+         cJSON_AddNumberToObject(timings, "total", pz_round(times->total_ms, 3));
     cJSON *singularities = cJSON_AddArrayToObject(root, "singularities");
     ok = ok && singularities;
     for (int32_t k = 0; ok && k < field->singularity_count; ++k) {

@@ -212,7 +212,7 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx)
         status = read_panels(args, &inputs, ctx);
     if (status == PZ_OK)
         status = read_correspondences(args, &inputs, ctx);
-    double read_ms = pz_cli_elapsed_ms(start, pz_seconds());
+    double read_ms = pz_elapsed_ms(start, pz_seconds());
     pz_result *result = NULL;
     pz_cli_progress_begin(args, ctx);
     if (status == PZ_OK)

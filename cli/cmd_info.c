@@ -146,7 +146,7 @@ static cJSON *json_loops(const mesh_report *report, int lengths)
         return cJSON_CreateNull();
     cJSON *array = cJSON_CreateArray();
     for (int32_t i = 0; array && i < report->d.boundary_loop_count; ++i) {
-        double value = lengths ? pz_cli_round(report->d.loop_lengths[i], LENGTH_DECIMALS)
+        double value = lengths ? pz_round(report->d.loop_lengths[i], LENGTH_DECIMALS)
                                : report->d.loop_vertex_counts[i];
         if (!cJSON_AddItemToArray(array, cJSON_CreateNumber(value))) {
             cJSON_Delete(array);
@@ -196,8 +196,8 @@ static cJSON *json_timings(const mesh_report *report)
 {
     cJSON *timings = cJSON_CreateObject();
     if (timings && (!cJSON_AddNumberToObject(timings, "read", report->read_ms) ||
-                    !cJSON_AddNumberToObject(timings, "validate", pz_cli_round(report->d.validate_ms, 3)) ||
-                    !cJSON_AddNumberToObject(timings, "topology", pz_cli_round(report->d.topology_ms, 3)) ||
+                    !cJSON_AddNumberToObject(timings, "validate", pz_round(report->d.validate_ms, 3)) ||
+                    !cJSON_AddNumberToObject(timings, "topology", pz_round(report->d.topology_ms, 3)) ||
                     !cJSON_AddNumberToObject(timings, "total", report->total_ms))) {
         cJSON_Delete(timings);
         return NULL;
@@ -228,7 +228,7 @@ static pz_status print_json(const mesh_report *report, pz_ctx *ctx)
     failed = failed || !cJSON_AddBoolToObject(root, "units_plausible", report->units_plausible);
     failed = failed || !cJSON_AddItemToObject(root, "bbox_mm", json_bbox(report));
     failed = failed || !cJSON_AddItemToObject(root, "area_mm2", report->d.area_known
-                                                                    ? cJSON_CreateNumber(pz_cli_round(report->d.area_mm2, LENGTH_DECIMALS))
+                                                                    ? cJSON_CreateNumber(pz_round(report->d.area_mm2, LENGTH_DECIMALS))
                                                                     : cJSON_CreateNull());
     failed = failed || !cJSON_AddNumberToObject(root, "uvs", mesh->uv_count);
     failed = failed || !cJSON_AddItemToObject(root, "labels", json_labels(mesh));
@@ -254,10 +254,10 @@ pz_status pz_cli_info(const pz_cli_args *args, pz_ctx *ctx)
     pz_cli_mesh_to_mm(args, mesh, &report.units, &report.units_plausible);
     report.units_guessed = args->units == PZ_UNITS_AUTO;
     report.mesh = mesh;
-    report.read_ms = pz_cli_elapsed_ms(start, pz_seconds());
+    report.read_ms = pz_elapsed_ms(start, pz_seconds());
 
     status = pz_mesh_describe(mesh, &report.d, ctx);
-    report.total_ms = pz_cli_elapsed_ms(start, pz_seconds());
+    report.total_ms = pz_elapsed_ms(start, pz_seconds());
     if (status == PZ_OK)
         status = args->json ? print_json(&report, ctx) : (print_text(&report), PZ_OK);
     if (status == PZ_OK)

@@ -219,7 +219,7 @@ static pz_status print_json(const pz_cli_args *args, const pz_prepare_result *re
         cJSON *step = cJSON_AddObjectToObject(steps, r->steps[s].name);
         failed = !step || !cJSON_AddBoolToObject(step, "ran", r->steps[s].ran) ||
                  !cJSON_AddStringToObject(step, "detail", r->steps[s].detail) ||
-                 !cJSON_AddNumberToObject(step, "ms", pz_cli_round(r->steps[s].seconds * 1000.0, 1));
+                 !cJSON_AddNumberToObject(step, "ms", pz_round(r->steps[s].seconds * 1000.0, 1));
     }
     const struct { const char *key; double value; } numbers[] = {
         {"input_vertices", r->input_vertices}, {"input_faces", r->input_faces},
@@ -234,14 +234,14 @@ static pz_status print_json(const pz_cli_args *args, const pz_prepare_result *re
     };
     for (size_t i = 0; !failed && i < sizeof numbers / sizeof numbers[0]; ++i)
         failed = !cJSON_AddNumberToObject(counts, numbers[i].key, numbers[i].value);
-    failed = failed || !cJSON_AddNumberToObject(root, "target_edge_mm", pz_cli_round(r->target_edge, 4));
-    failed = failed || !cJSON_AddNumberToObject(root, "bbox_diagonal_mm", pz_cli_round(r->bbox_diagonal, 3));
-    failed = failed || !cJSON_AddNumberToObject(root, "hausdorff_mm", pz_cli_round(r->hausdorff, 4));
-    failed = failed || !cJSON_AddNumberToObject(root, "pose_hausdorff_mm", pz_cli_round(r->pose_hausdorff_max, 4));
-    failed = failed || !cJSON_AddNumberToObject(root, "hausdorff_bound_mm", pz_cli_round(r->hausdorff_bound, 4));
+    failed = failed || !cJSON_AddNumberToObject(root, "target_edge_mm", pz_round(r->target_edge, 4));
+    failed = failed || !cJSON_AddNumberToObject(root, "bbox_diagonal_mm", pz_round(r->bbox_diagonal, 3));
+    failed = failed || !cJSON_AddNumberToObject(root, "hausdorff_mm", pz_round(r->hausdorff, 4));
+    failed = failed || !cJSON_AddNumberToObject(root, "pose_hausdorff_mm", pz_round(r->pose_hausdorff_max, 4));
+    failed = failed || !cJSON_AddNumberToObject(root, "hausdorff_bound_mm", pz_round(r->hausdorff_bound, 4));
     failed = failed || !cJSON_AddBoolToObject(root, "within_bound", r->within_bound);
     failed = failed || !cJSON_AddNumberToObject(root, "min_angle_over_20_fraction",
-                                                pz_cli_round(r->min_angle_over_20_fraction, 5));
+                                                pz_round(r->min_angle_over_20_fraction, 5));
     return pz_cli_print_json(root, failed, ctx);
 }
 

@@ -195,7 +195,7 @@ pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx)
         status = read_panels(args, mesh, &panels, &face_panel, ctx);
         options.panels = &panels;
     }
-    double read_ms = pz_cli_elapsed_ms(start, pz_seconds());
+    double read_ms = pz_elapsed_ms(start, pz_seconds());
     pz_result *result = NULL;
     pz_cli_progress_begin(args, ctx);
     if (status == PZ_OK)

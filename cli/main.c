@@ -329,33 +329,6 @@ pz_status pz_cli_expect_positionals(const pz_cli_args *args, int count, const ch
                     args->command);
 }
 
-/*
- * pz_mesh_prepare notes each repair as it makes it, but a run that then
- * fails must print its one error line only. So a copy is prepared quietly
- * first; only when that succeeds is the preparation repeated aloud (it is
- * deterministic), or, under --quiet, the prepared copy simply kept.
- */
-pz_status pz_cli_prepare_quietly_first(pz_mesh **mesh, const char *path, unsigned repair_flags, pz_ctx *ctx)
-{
-    pz_mesh *trial = NULL;
-    pz_status status = pz_mesh_copy(*mesh, &trial, ctx);
-    if (status != PZ_OK)
-        return status;
-    int quiet = ctx->quiet;
-    ctx->quiet = 1;
-    status = pz_mesh_prepare(trial, path, repair_flags, ctx);
-    ctx->quiet = quiet;
-    if (status == PZ_OK && quiet) {
-        pz_mesh_free(mesh);
-        *mesh = trial;
-        return PZ_OK;
-    }
-    pz_mesh_free(&trial);
-    if (status != PZ_OK)
-        return status;
-    return pz_mesh_prepare(*mesh, path, repair_flags, ctx);
-}
-
 void pz_cli_mesh_to_mm(const pz_cli_args *args, pz_mesh *mesh, pz_units *units_used, int *plausible)
 {
     if (plausible)
@@ -385,7 +358,7 @@ pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_m
         return status;
     pz_units used = PZ_UNITS_AUTO;
     pz_cli_mesh_to_mm(args, mesh, &used, NULL);
-    status = pz_cli_prepare_quietly_first(&mesh, path, args->repair_flags, ctx);
+    status = pz_mesh_prepare_quietly_first(&mesh, path, args->repair_flags, ctx);
     if (status != PZ_OK) {
         pz_mesh_free(&mesh);
         return status;
@@ -397,24 +370,11 @@ pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_m
     return PZ_OK;
 }
 
-double pz_cli_elapsed_ms(double start, double end)
-{
-    return pz_cli_round((end - start) * 1000.0, 3);
-}
-
-double pz_cli_round(double value, int decimals)
-{
-    double scale = pow(10.0, decimals);
-    if (!isfinite(value) || fabs(value) * scale > 1e15)
-        return value; /* nothing to shorten, and value * scale could overflow */
-    return round(value * scale) / scale;
-}
-
 cJSON *pz_cli_json_vec3(const double values[3], int decimals)
 {
     double rounded[3];
     for (int k = 0; k < 3; ++k)
-        rounded[k] = pz_cli_round(values[k], decimals);
+        rounded[k] = pz_round(values[k], decimals);
     return cJSON_CreateDoubleArray(rounded, 3);
 }
 

@@ -8,6 +8,7 @@
 #include "core/core.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -139,6 +140,19 @@ double pz_seconds(void)
     struct timespec now;
     clock_gettime(CLOCK_MONOTONIC, &now);
     return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
+}
+
+double pz_elapsed_ms(double start, double end)
+{
+    return pz_round((end - start) * 1000.0, 3);
+}
+
+double pz_round(double value, int decimals)
+{
+    double scale = pow(10.0, decimals);
+    if (!isfinite(value) || fabs(value) * scale > 1e15)
+        return value; /* nothing to shorten, and value * scale could overflow */
+    return round(value * scale) / scale;
 }
 
 static char *duplicate_string(const char *text)

@@ -139,6 +139,12 @@ void pz_note(pz_ctx *ctx, const char *fmt, ...)
 /** Wall-clock seconds from a monotonic clock, for timings. */
 double pz_seconds(void);
 
+/** Milliseconds between two pz_seconds() readings, rounded to microseconds (report figures). */
+double pz_elapsed_ms(double start, double end);
+
+/** value rounded to `decimals` decimals, so that JSON numbers print short (non-finite values as they are). */
+double pz_round(double value, int decimals);
+
 /* ------------------------------------------------------------------------ */
 /* Atomic output files                                                       */
 /* ------------------------------------------------------------------------ */

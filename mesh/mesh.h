@@ -184,6 +184,15 @@ typedef enum pz_repair_flags {
 pz_status pz_mesh_prepare(pz_mesh *mesh, const char *path, unsigned repair_flags, pz_ctx *ctx);
 
 /**
+ * pz_mesh_prepare for a caller that must print one error line and nothing
+ * else when it fails: a copy is prepared quietly first; only when that
+ * succeeds is the preparation repeated aloud (it is deterministic) or, in a
+ * quiet context, the prepared copy put in place of *mesh. On failure *mesh
+ * is unchanged.
+ */
+pz_status pz_mesh_prepare_quietly_first(pz_mesh **mesh, const char *name, unsigned repair_flags, pz_ctx *ctx);
+
+/**
  * Removes the faces with drop[f] != 0 in place, keeping the order of the
  * others with their corner UVs and labels. Vertices stay (drop them with
  * pz_mesh_drop_unreferenced). Returns the number of faces removed.

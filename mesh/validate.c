@@ -722,3 +722,30 @@ pz_status pz_mesh_prepare(pz_mesh *mesh, const char *path, unsigned repair_flags
     pz_validation_clear(&validation);
     return PZ_ERR_INVALID_MESH;
 }
+
+/*
+ * pz_mesh_prepare notes each repair as it makes it, but a run that then
+ * fails must print its one error line only. So a copy is prepared quietly
+ * first; only when that succeeds is the preparation repeated aloud (it is
+ * deterministic), or, in a quiet context, the prepared copy simply kept.
+ */
+pz_status pz_mesh_prepare_quietly_first(pz_mesh **mesh, const char *name, unsigned repair_flags, pz_ctx *ctx)
+{
+    pz_mesh *trial = NULL;
+    pz_status status = pz_mesh_copy(*mesh, &trial, ctx);
+    if (status != PZ_OK)
+        return status;
+    int quiet = ctx->quiet;
+    ctx->quiet = 1;
+    status = pz_mesh_prepare(trial, name, repair_flags, ctx);
+    ctx->quiet = quiet;
+    if (status == PZ_OK && quiet) {
+        pz_mesh_free(mesh);
+        *mesh = trial;
+        return PZ_OK;
+    }
+    pz_mesh_free(&trial);
+    if (status != PZ_OK)
+        return status;
+    return pz_mesh_prepare(*mesh, name, repair_flags, ctx);
+}

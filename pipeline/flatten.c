@@ -219,7 +219,7 @@ pz_status pl_flatten_pattern(const pz_run_options *options, const pz_pattern *pa
         status = flatten_textile(settings, pattern, grain, strain_limit, uv, &outcome->textile, ctx);
         break;
     }
-    outcome->ms = pl_elapsed_ms(start, pz_seconds());
+    outcome->ms = pz_elapsed_ms(start, pz_seconds());
     return status;
 }
 

@@ -25,12 +25,6 @@
 /* Space between pieces when a back-end's pieces overlap and are laid out again (mm). */
 #define PL_LAYOUT_GAP_MM 20.0
 
-/** Milliseconds between two pz_seconds() readings, rounded to microseconds. */
-double pl_elapsed_ms(double start, double end);
-
-/** Rounds to `decimals` decimals so JSON numbers print short. */
-double pl_round(double value, int decimals);
-
 /** The base name of a path without its extension (malloc'd; NULL when out of memory). */
 char *pl_base_name(const char *path);
 

@@ -65,7 +65,7 @@ static pz_status prepare_automatically(const pz_run_options *options, pz_result 
     ctx->quiet = 1;
     pz_status status = pz_prepare_auto(*mesh, &prepare_options, &result->prepared, ctx);
     ctx->quiet = quiet;
-    result->timings.prepare = pl_elapsed_ms(start, pz_seconds());
+    result->timings.prepare = pz_elapsed_ms(start, pz_seconds());
     if (status != PZ_OK)
         return status;
     const pz_prepare_report *report = &result->prepared->report;
@@ -84,33 +84,6 @@ static pz_status prepare_automatically(const pz_run_options *options, pz_result 
         *changed = 1;
     }
     return PZ_OK;
-}
-
-/*
- * pz_mesh_prepare notes each repair as it makes it, but a run that then
- * fails must print its one error line only. So a copy is prepared quietly
- * first; only when that succeeds is the preparation repeated aloud (it is
- * deterministic), or, in a quiet context, the prepared copy simply kept.
- */
-static pz_status repair_and_validate(pz_mesh **mesh, const char *name, unsigned repair_flags, pz_ctx *ctx)
-{
-    pz_mesh *trial = NULL;
-    pz_status status = pz_mesh_copy(*mesh, &trial, ctx);
-    if (status != PZ_OK)
-        return status;
-    int quiet = ctx->quiet;
-    ctx->quiet = 1;
-    status = pz_mesh_prepare(trial, name, repair_flags, ctx);
-    ctx->quiet = quiet;
-    if (status == PZ_OK && quiet) {
-        pz_mesh_free(mesh);
-        *mesh = trial;
-        return PZ_OK;
-    }
-    pz_mesh_free(&trial);
-    if (status != PZ_OK)
-        return status;
-    return pz_mesh_prepare(*mesh, name, repair_flags, ctx);
 }
 
 /* garment.obj's vertex positions in the input's units (see the file comment). */
@@ -163,7 +136,7 @@ pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepa
     if (prepare && (status = prepare_automatically(options, result, &garment->mesh, &prepared, ctx)) != PZ_OK)
         return status;
     const char *name = options->name ? options->name : "garment";
-    status = repair_and_validate(&garment->mesh, name, options->repair_flags, ctx);
+    status = pz_mesh_prepare_quietly_first(&garment->mesh, name, options->repair_flags, ctx);
     if (status != PZ_OK)
         return status;
     const pz_mesh *mesh = garment->mesh;

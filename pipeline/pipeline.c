@@ -23,19 +23,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-double pl_elapsed_ms(double start, double end)
-{
-    return pl_round((end - start) * 1000.0, 3);
-}
-
-double pl_round(double value, int decimals)
-{
-    double scale = pow(10.0, decimals);
-    if (!isfinite(value) || fabs(value) * scale > 1e15)
-        return value; /* nothing to shorten, and value * scale could overflow */
-    return round(value * scale) / scale;
-}
-
 void pl_stage(pz_ctx *ctx, const char *stage, double from, double to, const char *message)
 {
     pz_progress_range(ctx, 0, 0);
@@ -250,11 +237,11 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
         }
         mark = pz_seconds();
         status = choose_panels(run, result, round, ctx);
-        result->timings.panels += pl_elapsed_ms(mark, pz_seconds());
+        result->timings.panels += pz_elapsed_ms(mark, pz_seconds());
         if (status == PZ_OK)
             status = pz_pattern_build(run->garment.mesh, run->choice.face_panel, run->choice.extra_cuts,
                                       &run->correspondences, name, &result->pattern, ctx);
-        result->timings.pattern += pl_elapsed_ms(mark, now = pz_seconds()), mark = now;
+        result->timings.pattern += pz_elapsed_ms(mark, now = pz_seconds()), mark = now;
         if (status == PZ_OK && !(result->uv = calloc(2 * (size_t)result->pattern->mesh->vertex_count + 2,
                                                      sizeof(double))))
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
@@ -268,7 +255,7 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
         int accepted = 1;
         if (status == PZ_OK && run->segmenter)
             accepted = pl_segmenter_accept(run->segmenter, result->pattern, result->uv, ctx);
-        result->timings.flatten += pl_elapsed_ms(mark, now = pz_seconds()), mark = now;
+        result->timings.flatten += pz_elapsed_ms(mark, now = pz_seconds()), mark = now;
         if (status == PZ_OK && !accepted)
             status = pz_check_cancel(ctx, pl_who(result));
         if (status != PZ_OK || accepted)
@@ -284,7 +271,7 @@ static pz_status measure(pipeline_run *run, pz_result *result, pz_ctx *ctx)
     double mark = pz_seconds(), now;
     pl_warn_wirewarp(&result->options, &result->backend, ctx);  /* once, for the pattern kept */
     pz_status status = pl_pattern_layout(result->pattern, result->uv, PL_LAYOUT_GAP_MM, &result->layout_moved, ctx);
-    result->timings.flatten += pl_elapsed_ms(mark, now = pz_seconds()), mark = now;
+    result->timings.flatten += pz_elapsed_ms(mark, now = pz_seconds()), mark = now;
     if (status == PZ_OK) {
         result->metrics_count = 1 + result->pattern->mesh->pose_count;
         if (!(result->metrics = calloc((size_t)result->metrics_count, sizeof *result->metrics)))
@@ -293,7 +280,7 @@ static pz_status measure(pipeline_run *run, pz_result *result, pz_ctx *ctx)
     if (status == PZ_OK)
         status = pl_measure(result->pattern, result->uv, &result->options.flatten.fabric, result->metrics,
                             result->metrics_count, ctx);
-    result->timings.metrics = pl_elapsed_ms(mark, pz_seconds());
+    result->timings.metrics = pz_elapsed_ms(mark, pz_seconds());
     /* Names belong to the panels as chosen; should the pattern number them otherwise, show none. */
     if (status == PZ_OK && result->pattern->panel_count == run->choice.panel_count) {
         result->panel_names = run->choice.names;
@@ -354,8 +341,8 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
         pl_stage(ctx, "export", 0.9, 1.0, "pieces and marker");
         status = build_pieces(result, ctx);
     }
-    result->timings.pieces = pl_elapsed_ms(mark, pz_seconds());
-    result->timings.total = pl_elapsed_ms(start, pz_seconds());
+    result->timings.pieces = pz_elapsed_ms(mark, pz_seconds());
+    result->timings.total = pz_elapsed_ms(start, pz_seconds());
     pipeline_run_clear(&run);
     pz_progress_range(ctx, 0, 0);
     result->options.panels = NULL;  /* the caller's, and not needed beyond this call */

@@ -56,7 +56,7 @@ typedef struct json_builder {
 static void add_number(json_builder *builder, cJSON *object, const char *key, double value, int decimals)
 {
     /* + 0.0 turns a rounded -0 into 0 */
-    if (!cJSON_AddNumberToObject(object, key, pl_round(value, decimals) + 0.0))
+    if (!cJSON_AddNumberToObject(object, key, pz_round(value, decimals) + 0.0))
         builder->failed = 1;
 }
 
@@ -92,7 +92,7 @@ static void add_doubles(json_builder *builder, cJSON *parent, const char *key, c
 {
     double rounded[8];
     for (int i = 0; i < count && i < 8; ++i)
-        rounded[i] = pl_round(values[i], decimals);
+        rounded[i] = pz_round(values[i], decimals);
     cJSON *array = cJSON_CreateDoubleArray(rounded, count);
     if (!array || !cJSON_AddItemToObject(parent, key, array)) {
         cJSON_Delete(array);
@@ -312,13 +312,13 @@ static void add_cutting_line(json_builder *builder, cJSON *object, const report_
     for (int32_t i = 0; points && points_2d && i < panel->cut_vertex_count; ++i) {
         int32_t v = panel->cut_vertices[i];
         const double *x = mesh->positions + 3 * (size_t)v;
-        double xyz[3] = {pl_round(x[0], 6), pl_round(x[1], 6), pl_round(x[2], 6)};
+        double xyz[3] = {pz_round(x[0], 6), pz_round(x[1], 6), pz_round(x[2], 6)};
         cJSON *point = cJSON_CreateDoubleArray(xyz, 3);
         if (!point || !cJSON_AddItemToArray(points, point)) {
             cJSON_Delete(point);
             builder->failed = 1;
         }
-        double uv[2] = {pl_round(report->uv[2 * (size_t)v], 6), pl_round(report->uv[2 * (size_t)v + 1], 6)};
+        double uv[2] = {pz_round(report->uv[2 * (size_t)v], 6), pz_round(report->uv[2 * (size_t)v + 1], 6)};
         cJSON *point_2d = cJSON_CreateDoubleArray(uv, 2);
         if (!point_2d || !cJSON_AddItemToArray(points_2d, point_2d)) {
             cJSON_Delete(point_2d);
@@ -367,7 +367,7 @@ static void add_springmass_result(json_builder *builder, cJSON *object, const re
     add_number(builder, object, "energy_map_count", r->vertex_count, 0);
     cJSON *map = cJSON_CreateArray();
     for (int32_t v = 0; map && v < r->vertex_count; ++v) {
-        cJSON *value = cJSON_CreateNumber(pl_round(r->vertex_energy[v], 9) + 0.0);
+        cJSON *value = cJSON_CreateNumber(pz_round(r->vertex_energy[v], 9) + 0.0);
         if (!value || !cJSON_AddItemToArray(map, value)) {
             cJSON_Delete(value);
             cJSON_Delete(map);
@@ -466,7 +466,7 @@ static void add_summary(json_builder *builder, cJSON *root, const report_view *r
     add_number(builder, summary, "max_abs_strain", max_abs_strain, 8);
     cJSON *by_pose = add_array(builder, summary, "max_abs_strain_by_pose");
     for (int i = 0; by_pose && i < report->metrics_count; ++i) {
-        cJSON *value = cJSON_CreateNumber(pl_round(report->metrics[i]->max_abs_strain, 8) + 0.0);
+        cJSON *value = cJSON_CreateNumber(pz_round(report->metrics[i]->max_abs_strain, 8) + 0.0);
         if (!value || !cJSON_AddItemToArray(by_pose, value)) {
             cJSON_Delete(value);
             builder->failed = 1;
@@ -549,8 +549,8 @@ static int extend_symmetry(const pz_result *result, cJSON *object)
     ok &= add_plain_number(symmetry, "offset", plane->found ? plane->offset : 0);
     ok &= add_plain_number(symmetry, "mesh_residual_mm", plane->found ? plane->residual_mm : 0);
     ok &= add_plain_number(symmetry, "layout_residual_mm", plane->found ? segment->symmetry_residual_mm : 0);
-    ok &= add_plain_number(symmetry, "pattern_residual_mm", pl_round(result->pattern_mirror_rms_mm, 6));
-    ok &= add_plain_number(symmetry, "pattern_residual_max_mm", pl_round(result->pattern_mirror_max_mm, 6));
+    ok &= add_plain_number(symmetry, "pattern_residual_mm", pz_round(result->pattern_mirror_rms_mm, 6));
+    ok &= add_plain_number(symmetry, "pattern_residual_max_mm", pz_round(result->pattern_mirror_max_mm, 6));
     return ok;
 }
 
@@ -574,9 +574,9 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
         const pz_truing_result *t = &result->truing;
         ok &= add_plain_number(truing, "moved_vertices", t->moved_vertices);
         ok &= add_plain_number(truing, "relaxed_vertices", t->relaxed_vertices);
-        ok &= add_plain_number(truing, "max_move_mm", pl_round(t->max_move_mm, 3));
-        ok &= add_plain_number(truing, "mean_turn_before_deg", pl_round(t->mean_turn_before_deg, 2));
-        ok &= add_plain_number(truing, "mean_turn_after_deg", pl_round(t->mean_turn_after_deg, 2));
+        ok &= add_plain_number(truing, "max_move_mm", pz_round(t->max_move_mm, 3));
+        ok &= add_plain_number(truing, "mean_turn_before_deg", pz_round(t->mean_turn_before_deg, 2));
+        ok &= add_plain_number(truing, "mean_turn_after_deg", pz_round(t->mean_turn_after_deg, 2));
     }
     ok &= add_plain_number(object, "vetoed_panels", result->vetoed_panels);
     /* Monotone panel counts: the looser settings laid out first, their cuts kept (docs/segment.md). */
@@ -587,7 +587,7 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
         ok &= add_plain_number(ladder, "most_panels", result->looser_most_panels);
         ok &= cJSON_AddBoolToObject(ladder, "seeded", result->looser_seeded) != NULL;
         cJSON *timings = cJSON_AddObjectToObject(ladder, "timings_ms");
-        ok &= timings && add_plain_number(timings, "total", pl_round(result->timings.looser_goals, 3));
+        ok &= timings && add_plain_number(timings, "total", pz_round(result->timings.looser_goals, 3));
     }
     if (!segment)
         return ok;
@@ -646,15 +646,15 @@ static int extend_run_report(const pz_result *result, cJSON *root)
     cJSON *summary = cJSON_GetObjectItem(root, "summary");
     if (ok && summary) {
         ok &= cJSON_AddBoolToObject(summary, "goals_met", result->verdict.goals_met) != NULL;
-        ok &= add_plain_number(summary, "max_seam_mismatch_any_rel", pl_round(result->verdict.worst_seam_mismatch, 6));
+        ok &= add_plain_number(summary, "max_seam_mismatch_any_rel", pz_round(result->verdict.worst_seam_mismatch, 6));
         if (!result->verdict.goals_met)
             ok &= cJSON_AddStringToObject(summary, "goals_reasons", result->verdict.reasons) != NULL;
     }
     cJSON *timings = cJSON_GetObjectItem(root, "timings_ms");
     if (ok && timings) {
-        ok &= add_plain_number(timings, "prepare", pl_round(result->timings.prepare, 3));
-        ok &= add_plain_number(timings, "field", pl_round(result->timings.field, 3));
-        ok &= add_plain_number(timings, "segment", pl_round(result->timings.segment, 3));
+        ok &= add_plain_number(timings, "prepare", pz_round(result->timings.prepare, 3));
+        ok &= add_plain_number(timings, "field", pz_round(result->timings.field, 3));
+        ok &= add_plain_number(timings, "segment", pz_round(result->timings.segment, 3));
     }
     return ok && extend_segmentation(result, root) && extend_prepare(result, root);
 }

@@ -240,7 +240,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         options.use_poses = 1;
         pl_stage(ctx, "field", 0.1, 0.2, "cross-field");
         status = pz_field_compute(garment, topology, &options, &seg->field, ctx);
-        seg->field_ms = pl_elapsed_ms(start, pz_seconds());
+        seg->field_ms = pz_elapsed_ms(start, pz_seconds());
         if (status == PZ_OK)
             pz_note(ctx, "run: field: %.0f ms, %d singularities", seg->field_ms,
                     (int)seg->field->singularity_count);
@@ -269,7 +269,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         pz_segment_result_free(&seg->segment);
         status = segment_once(seg, garment, topology, sketch, &seg->goals, NULL, ctx, &seg->segment, ctx);
     }
-    seg->segment_ms = pl_elapsed_ms(field_end, pz_seconds());
+    seg->segment_ms = pz_elapsed_ms(field_end, pz_seconds());
     if (status == PZ_OK && seg->options->truing) {
         status = pz_segment_true_seams(garment, topology, seg->segment->edge_cut, NULL, &seg->truing_result, ctx);
         if (status == PZ_OK)
@@ -407,7 +407,7 @@ static pz_status solve_setting(pl_segmenter *seg, pz_mesh *garment, const pz_top
     pz_status status = ladder_parents(seg, garment, topology, sketch, max_strain, max_corners, &seeds, most_panels,
                                       ctx);
     if (goals == &seg->goals)
-        seg->ladder_ms = pl_elapsed_ms(start, pz_seconds());  /* the run's own: its looser settings' time */
+        seg->ladder_ms = pz_elapsed_ms(start, pz_seconds());  /* the run's own: its looser settings' time */
     set_goals(seg, goals, max_strain, max_corners);
     if (status == PZ_OK)
         status = verdict_rounds(seg, garment, topology, sketch, goals, NULL, out, ctx);
@@ -462,7 +462,7 @@ static pz_status ladder_cuts(pl_segmenter *seg, pz_mesh *garment, const pz_topol
             pz_note(ctx, "run: looser goals S = %g, C = %d: %d panels%s%s, %d verdict rounds, %.0f ms", max_strain,
                     (int)max_corners, (int)segment->panel_count, seeded ? " (seeded with their looser goals' cuts)" : "",
                     segment->goals_met ? "" : " (goals not met)", (int)goals.verdict_rounds,
-                    pl_elapsed_ms(start, pz_seconds()));
+                    pz_elapsed_ms(start, pz_seconds()));
         }
     }
     pz_segment_result_free(&segment);

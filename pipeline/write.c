@@ -263,7 +263,7 @@ static pz_status build_report(writer *w, pz_ctx *ctx)
 {
     if (w->report_root)
         return PZ_OK;
-    w->result->timings.write = pl_elapsed_ms(w->write_start, pz_seconds());
+    w->result->timings.write = pz_elapsed_ms(w->write_start, pz_seconds());
     cJSON *root = pz_result_report(w->result);
     w->report_text = root ? cJSON_Print(root) : NULL;
     if (!w->report_text) {
