@@ -50,6 +50,7 @@
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#include "core/heap.h"
 #include "param/pattern_internal.h"
 #include "core/util.h"
 #include "core/vec.h"
@@ -286,49 +287,6 @@ static pz_status analyse_panels(pattern_builder *b, const pz_mesh *cut_mesh, con
 /* Dijkstra: joining the boundary loops of a panel                          */
 /* ------------------------------------------------------------------------ */
 
-typedef struct heap_item {
-    double distance;
-    int32_t vertex;
-} heap_item;
-
-typedef struct heap {
-    heap_item *items;
-    size_t count, capacity;
-} heap;
-
-static int heap_push(heap *q, double distance, int32_t vertex)
-{
-    if (!pz_grow((void **)&q->items, &q->capacity, q->count + 1, sizeof(heap_item)))
-        return 0;
-    size_t i = q->count++;
-    while (i > 0 && q->items[(i - 1) / 2].distance > distance) {
-        q->items[i] = q->items[(i - 1) / 2];
-        i = (i - 1) / 2;
-    }
-    q->items[i] = (heap_item){distance, vertex};
-    return 1;
-}
-
-static heap_item heap_pop(heap *q)
-{
-    heap_item top = q->items[0], last = q->items[--q->count];
-    size_t i = 0;
-    for (;;) {
-        size_t child = 2 * i + 1;
-        if (child >= q->count)
-            break;
-        if (child + 1 < q->count && q->items[child + 1].distance < q->items[child].distance)
-            ++child;
-        if (q->items[child].distance >= last.distance)
-            break;
-        q->items[i] = q->items[child];
-        i = child;
-    }
-    if (q->count)
-        q->items[i] = last;
-    return top;
-}
-
 /* Scratch for the loop-joining searches over one cut mesh. */
 typedef struct path_search {
     const pz_topology *ct;
@@ -339,7 +297,7 @@ typedef struct path_search {
     double *distance;
     int32_t *previous_edge;      /* the edge a vertex was reached by, -1 for a source */
     uint8_t *joined;             /* vertex is in the joined set (a source) */
-    heap queue;
+    pz_heap queue;
 } path_search;
 
 static void path_search_free(path_search *s)
@@ -350,7 +308,7 @@ static void path_search_free(path_search *s)
     free(s->distance);
     free(s->previous_edge);
     free(s->joined);
-    free(s->queue.items);
+    pz_heap_free(&s->queue);
 }
 
 static int path_search_init(path_search *s, const pz_mesh *cut_mesh, const pz_topology *ct, const pz_loops *loops)
@@ -410,29 +368,29 @@ static int32_t nearest_loop_vertex(path_search *s, const int32_t *panel_vertices
                                    const uint8_t *loop_joined)
 {
     const pz_topology *ct = s->ct;
-    s->queue.count = 0;
+    pz_heap_clear(&s->queue);
     for (int32_t i = 0; i < count; ++i) {
         int32_t v = panel_vertices[i];
         s->distance[v] = s->joined[v] ? 0.0 : INFINITY;
         s->previous_edge[v] = -1;
-        if (s->joined[v] && !heap_push(&s->queue, 0.0, v))
+        if (s->joined[v] && !pz_heap_push(&s->queue, 0.0, v))
             return -2;
     }
-    while (s->queue.count) {
-        heap_item item = heap_pop(&s->queue);
-        int32_t v = item.vertex;
-        if (item.distance > s->distance[v])
+    double distance;
+    int32_t v;
+    while (pz_heap_pop(&s->queue, &distance, &v)) {
+        if (distance > s->distance[v])
             continue; /* a stale entry */
         if (!s->joined[v] && s->loop_of_vertex[v] >= 0 && !loop_joined[s->loop_of_vertex[v]])
             return v;
         for (int32_t i = s->adjacency_offsets[v]; i < s->adjacency_offsets[v + 1]; ++i) {
             int32_t e = s->adjacency[i], h = ct->edge_halfedge[2 * e];
             int32_t w = pz_he_from(ct, h) == v ? pz_he_to(ct, h) : pz_he_from(ct, h);
-            double d = item.distance + pz_vec3_distance(s->positions + 3 * (size_t)v, s->positions + 3 * (size_t)w);
+            double d = distance + pz_vec3_distance(s->positions + 3 * (size_t)v, s->positions + 3 * (size_t)w);
             if (d < s->distance[w]) {
                 s->distance[w] = d;
                 s->previous_edge[w] = e;
-                if (!heap_push(&s->queue, d, w))
+                if (!pz_heap_push(&s->queue, d, w))
                     return -2;
             }
         }

@@ -26,62 +26,18 @@
  */
 #include "segment/internal.h"
 
+#include "core/heap.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-typedef struct heap_item {
-    double key;
-    int32_t vertex;
-} heap_item;
-
-typedef struct heap {
-    heap_item *items;
-    int32_t count;
-} heap;
-
-static void heap_push(heap *h, double key, int32_t vertex)
-{
-    int32_t i = h->count++;
-    h->items[i].key = key;
-    h->items[i].vertex = vertex;
-    while (i > 0) {
-        int32_t parent = (i - 1) / 2;
-        if (h->items[parent].key <= h->items[i].key)
-            break;
-        heap_item swap = h->items[parent];
-        h->items[parent] = h->items[i];
-        h->items[i] = swap;
-        i = parent;
-    }
-}
-
-static heap_item heap_pop(heap *h)
-{
-    heap_item top = h->items[0];
-    h->items[0] = h->items[--h->count];
-    for (int32_t i = 0;;) {
-        int32_t l = 2 * i + 1, r = l + 1, m = i;
-        if (l < h->count && h->items[l].key < h->items[m].key)
-            m = l;
-        if (r < h->count && h->items[r].key < h->items[m].key)
-            m = r;
-        if (m == i)
-            break;
-        heap_item swap = h->items[m];
-        h->items[m] = h->items[i];
-        h->items[i] = swap;
-        i = m;
-    }
-    return top;
-}
 
 /* Scratch over garment vertices for one panel. */
 typedef struct panel_scratch {
     uint8_t *state;     /* vertex_count: 0 not in panel, 1 inner, 2 on the outline, 3 blocked */
     double *distance;   /* vertex_count */
     int32_t *previous;  /* vertex_count */
-    heap queue;         /* room for 2 * edge_count pushes */
+    pz_heap queue;      /* room for 2 * edge_count pushes, reserved: a push never fails */
 } panel_scratch;
 
 static double edge_length(const seg_layout *layout, int32_t a, int32_t b)
@@ -137,20 +93,20 @@ static int32_t shortest_to_outline(const seg_layout *layout, int32_t p, int32_t 
             s->distance[v] = INFINITY;
             s->previous[v] = -1;
         }
-    s->queue.count = 0;
+    pz_heap_clear(&s->queue);
     if (sources) {
         for (int32_t i = 0; i < source_count; ++i) {
             s->distance[sources[i]] = 0;
-            heap_push(&s->queue, 0, sources[i]);
+            pz_heap_push(&s->queue, 0, sources[i]);
         }
     } else {
         s->distance[source] = 0;
-        heap_push(&s->queue, 0, source);
+        pz_heap_push(&s->queue, 0, source);
     }
-    while (s->queue.count > 0) {
-        heap_item top = heap_pop(&s->queue);
-        int32_t v = top.vertex;
-        if (top.key > s->distance[v])
+    double key;
+    int32_t v;
+    while (pz_heap_pop(&s->queue, &key, &v)) {
+        if (key > s->distance[v])
             continue;
         if (!all && v != source && s->state[v] == 2)
             return v;
@@ -164,11 +120,11 @@ static int32_t shortest_to_outline(const seg_layout *layout, int32_t p, int32_t 
             int32_t w = pz_he_from(layout->topology, h) == v ? pz_he_to(layout->topology, h) : pz_he_from(layout->topology, h);
             if (s->state[w] == 3 || s->state[w] == 0)
                 continue;
-            double d = top.key + edge_length(layout, v, w);
+            double d = key + edge_length(layout, v, w);
             if (d < s->distance[w]) {
                 s->distance[w] = d;
                 s->previous[w] = v;
-                heap_push(&s->queue, d, w);
+                pz_heap_push(&s->queue, d, w);
             }
         }
     }
@@ -275,10 +231,13 @@ pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx)
     s.state = calloc((size_t)vertices + 1, 1);
     s.distance = malloc(((size_t)vertices + 1) * sizeof(double));
     s.previous = malloc(((size_t)vertices + 1) * sizeof(int32_t));
-    s.queue.items = malloc(((size_t)2 * layout->topology->edge_count + 2) * sizeof(heap_item));
+    memset(&s.queue, 0, sizeof s.queue);
+    s.queue.capacity = (size_t)2 * layout->topology->edge_count + 2;
+    s.queue.keys = malloc(s.queue.capacity * sizeof(double));
+    s.queue.items = malloc(s.queue.capacity * sizeof(int32_t));
     double *defect = malloc(((size_t)vertices + 1) * sizeof(double));
     pz_status status = PZ_OK;
-    if (!s.state || !s.distance || !s.previous || !s.queue.items || !defect)
+    if (!s.state || !s.distance || !s.previous || !s.queue.keys || !s.queue.items || !defect)
         status = pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
     if (!status)
         pz_geom_angle_defect(layout->mesh, layout->topology, defect);
@@ -331,7 +290,7 @@ pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx)
     free(s.state);
     free(s.distance);
     free(s.previous);
-    free(s.queue.items);
+    pz_heap_free(&s.queue);
     free(defect);
     return status;
 }

@@ -97,13 +97,13 @@ typedef struct search_scratch {
     uint32_t *seen;    /* vertex_count: stamp of the last path that visited the vertex */
     uint32_t stamp;
     size_t seen_count;
-    trace_heap heap;
+    pz_heap heap;
 } search_scratch;
 
 static void scratch_free(search_scratch *s)
 {
     free(s->dist), free(s->pred), free(s->hops), free(s->touched), free(s->chain), free(s->seen);
-    trace_heap_free(&s->heap);
+    pz_heap_free(&s->heap);
     memset(s, 0, sizeof *s);
 }
 
@@ -143,7 +143,7 @@ static int relax(search_scratch *s, int32_t node, int32_t from, double dist, int
     if (s->dist[node] == INFINITY)
         s->touched[s->touched_count++] = node;
     s->dist[node] = dist, s->pred[node] = from, s->hops[node] = hops;
-    return trace_heap_push(&s->heap, dist, node);
+    return pz_heap_push(&s->heap, dist, node);
 }
 
 /*
@@ -161,7 +161,7 @@ static int32_t search_loop(const pz_trace_graph *graph, int32_t source, double m
             return -1;
     double d;
     int32_t u;
-    while (trace_heap_pop(&s->heap, &d, &u)) {
+    while (pz_heap_pop(&s->heap, &d, &u)) {
         if (d > s->dist[u])
             continue;
         if (d > max_cost)
@@ -194,7 +194,7 @@ static int32_t search_border(const pz_trace_graph *graph, int32_t source, double
         return -1;
     double d;
     int32_t u, target = -1;
-    while (trace_heap_pop(&s->heap, &d, &u)) {
+    while (pz_heap_pop(&s->heap, &d, &u)) {
         if (d > s->dist[u])
             continue;
         if (d > max_cost)
@@ -606,31 +606,31 @@ pz_status pz_trace_candidates(const pz_trace_graph *graph, const pz_mesh *mesh, 
 /* ---------------------------------------------------------------- distance */
 
 /* Sets the axis nodes of the paths to distance 0 and queues them. Returns 0 when out of memory. */
-static int seed_paths(const pz_trace_path *paths, int32_t path_count, double *distance, trace_heap *heap)
+static int seed_paths(const pz_trace_path *paths, int32_t path_count, double *distance, pz_heap *heap)
 {
     for (int32_t p = 0; p < path_count; ++p)
         for (int32_t i = 0; i < paths[p].vertex_count; ++i)
             for (int side = 0; side < 4; side += 2) { /* the path's arm and the opposite one: its axis */
                 int32_t node = 4 * paths[p].vertices[i] + (paths[p].arms[i] + side) % 4;
-                if (distance[node] > 0.0 && (distance[node] = 0.0, !trace_heap_push(heap, 0.0, node)))
+                if (distance[node] > 0.0 && (distance[node] = 0.0, !pz_heap_push(heap, 0.0, node)))
                     return 0;
             }
     return 1;
 }
 
 /* Dijkstra over the 4-sheeted covering from the queued nodes, lowering distance[]. Returns 0 when out of memory. */
-static int spread(const pz_trace_graph *graph, double *distance, trace_heap *heap)
+static int spread(const pz_trace_graph *graph, double *distance, pz_heap *heap)
 {
     double d;
     int32_t u;
-    while (trace_heap_pop(heap, &d, &u)) {
+    while (pz_heap_pop(heap, &d, &u)) {
         if (d > distance[u])
             continue;
         int32_t v = u / 4, arm = u % 4;
         for (int32_t i = graph->neighbor_offsets[v]; i < graph->neighbor_offsets[v + 1]; ++i) {
             int32_t t = 4 * graph->neighbor_vertices[i] + (arm + graph->neighbor_shift[i]) % 4;
             double nd = d + graph->neighbor_lengths[i];
-            if (nd < distance[t] && (distance[t] = nd, !trace_heap_push(heap, nd, t)))
+            if (nd < distance[t] && (distance[t] = nd, !pz_heap_push(heap, nd, t)))
                 return 0;
         }
     }
@@ -647,13 +647,13 @@ pz_status pz_trace_distance(const pz_trace_graph *graph, const pz_trace_path *pa
 {
     for (int32_t n = 0; n < graph->node_count; ++n)
         distance[n] = INFINITY;
-    trace_heap heap = {0};
+    pz_heap heap = {0};
     int ok = seed_paths(paths, path_count, distance, &heap);
     for (int32_t n = 0; n < graph->node_count && ok && from_boundary; ++n)
         if (graph->node_kind[n] == PZ_TRACE_NODE_ALONG && distance[n] > 0.0)
-            distance[n] = 0.0, ok = trace_heap_push(&heap, 0.0, n);
+            distance[n] = 0.0, ok = pz_heap_push(&heap, 0.0, n);
     ok = ok && spread(graph, distance, &heap);
-    trace_heap_free(&heap);
+    pz_heap_free(&heap);
     return ok ? PZ_OK : distance_nomem(graph, ctx);
 }
 
@@ -668,9 +668,9 @@ pz_status pz_trace_distance(const pz_trace_graph *graph, const pz_trace_path *pa
 pz_status pz_trace_distance_add(const pz_trace_graph *graph, const pz_trace_path *paths, int32_t path_count,
                                 double *distance, pz_ctx *ctx)
 {
-    trace_heap heap = {0};
+    pz_heap heap = {0};
     int ok = seed_paths(paths, path_count, distance, &heap) && spread(graph, distance, &heap);
-    trace_heap_free(&heap);
+    pz_heap_free(&heap);
     return ok ? PZ_OK : distance_nomem(graph, ctx);
 }
 

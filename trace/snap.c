@@ -31,7 +31,7 @@ typedef struct walker {
     size_t touched_count;
     int32_t *position;   /* vertex_count: index in the path being built, -1 when not in it */
     int32_t *route;      /* vertex_count: one A* route, target first */
-    trace_heap heap;
+    pz_heap heap;
     int32_t *sequence;   /* the path being built */
     int32_t length, capacity;
 } walker;
@@ -39,7 +39,7 @@ typedef struct walker {
 static void walker_free(walker *w)
 {
     free(w->dist), free(w->pred), free(w->touched), free(w->position), free(w->route), free(w->sequence);
-    trace_heap_free(&w->heap);
+    pz_heap_free(&w->heap);
 }
 
 static int walker_init(walker *w, const pz_mesh *mesh, const pz_topology *topology)
@@ -79,13 +79,13 @@ static int32_t shortest_route(walker *w, int32_t from, int32_t to)
         w->dist[w->touched[i]] = INFINITY;
     w->touched_count = 0, w->heap.count = 0;
     w->dist[from] = 0.0, w->pred[from] = -1, w->touched[w->touched_count++] = from;
-    if (!trace_heap_push(&w->heap, vertex_distance(w->mesh, from, to), from))
+    if (!pz_heap_push(&w->heap, vertex_distance(w->mesh, from, to), from))
         return -1;
     int32_t ring[256];
     double key;
     int32_t u;
     int found = 0;
-    while (trace_heap_pop(&w->heap, &key, &u)) {
+    while (pz_heap_pop(&w->heap, &key, &u)) {
         if (key > w->dist[u] + vertex_distance(w->mesh, u, to) + 1e-9)
             continue; /* stale */
         if (u == to) {
@@ -101,7 +101,7 @@ static int32_t shortest_route(walker *w, int32_t from, int32_t to)
             if (w->dist[t] == INFINITY)
                 w->touched[w->touched_count++] = t;
             w->dist[t] = nd, w->pred[t] = u;
-            if (!trace_heap_push(&w->heap, nd + vertex_distance(w->mesh, t, to), t))
+            if (!pz_heap_push(&w->heap, nd + vertex_distance(w->mesh, t, to), t))
                 return -1;
         }
     }

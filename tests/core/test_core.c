@@ -28,6 +28,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "core/core.h"
+#include "core/heap.h"
 #include "core/util.h"
 #include "core/vec.h"
 #include "test_files.h"
@@ -428,6 +429,36 @@ static void test_union_find(void)
     }
 }
 
+/* The heap pops in (key, item) order whatever the pushes' order, ties included; it grows past 256. */
+static void test_heap(void)
+{
+    enum { COUNT = 1000 };
+    pz_heap heap = {0};
+    unsigned state = 12345;
+    int pushed = 1;
+    for (int i = 0; i < COUNT; ++i) {
+        state = state * 1103515245u + 12345u;
+        double key = (double)((state >> 16) % 37); /* many equal keys */
+        pushed &= pz_heap_push(&heap, key, (int32_t)((state >> 8) % 500));
+    }
+    CHECK(pushed && heap.count == COUNT && heap.capacity >= COUNT, "pushes: count %zu capacity %zu", heap.count,
+          heap.capacity);
+    double key, last_key = -1;
+    int32_t item, last_item = -1;
+    int ordered = 1, popped = 0;
+    while (pz_heap_pop(&heap, &key, &item)) {
+        ordered &= key > last_key || (key == last_key && item >= last_item);
+        last_key = key, last_item = item, ++popped;
+    }
+    CHECK(ordered && popped == COUNT, "pops out of (key, item) order or missing: %d", popped);
+    CHECK(!pz_heap_pop(&heap, NULL, NULL), "an empty heap popped");
+    pz_heap_push(&heap, 2.0, 7);
+    pz_heap_clear(&heap);
+    CHECK(heap.count == 0 && !pz_heap_pop(&heap, &key, &item), "clear left entries");
+    pz_heap_free(&heap);
+    CHECK(!heap.keys && !heap.items && heap.capacity == 0, "free left memory");
+}
+
 int main(void)
 {
     test_temp_dir_create("pz_core");
@@ -440,6 +471,7 @@ int main(void)
     test_vec3();
     test_grow();
     test_union_find();
+    test_heap();
     CHECK(test_temp_dir_remove() == 0, "cannot remove %s", test_temp_dir);
     return test_finish();
 }

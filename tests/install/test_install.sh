@@ -6,7 +6,7 @@
 #  - the files: libpanelize.so.MAJOR (SONAME) exporting pz_* symbols only,
 #    libpanelize.a, the panelize command, panelize.pc, the CMake package;
 #  - the headers: exactly the public ones (<folder>/<folder>.h, core's
-#    vec.h, util.h and version.h, the umbrella panelize.h), each compiling on
+#    vec.h, util.h, heap.h and version.h, the umbrella panelize.h), each compiling on
 #    its own (C and C++) with nothing but `pkg-config --cflags panelize`;
 #  - tests/install/consumer.c built with `pkg-config --cflags --libs` (shared),
 #    with `pkg-config --static` against libpanelize.a, and by a CMake project
@@ -103,7 +103,7 @@ done
 while read -r header; do
     folder=${header%%/*}
     case $header in
-        panelize.h | core/vec.h | core/util.h | core/version.h) ;;
+        panelize.h | core/vec.h | core/util.h | core/heap.h | core/version.h) ;;
         "$folder/$folder.h") ;;
         *) fail "private file installed: include/panelize/$header" ;;
     esac
