@@ -20,11 +20,15 @@ static inline int pz_grow(void **data, size_t *capacity, size_t needed, size_t e
 {
     if (needed <= *capacity)
         return 1;
+    /* No object may be larger than PTRDIFF_MAX bytes: refuse before asking (and before doubling could wrap). */
+    size_t most = (size_t)PTRDIFF_MAX / element_size;
+    if (needed > most)
+        return 0;
     size_t grown = *capacity ? *capacity : 64;
     while (grown < needed)
-        grown = grown > SIZE_MAX / 2 ? needed : grown * 2;  /* doubling would wrap to 0 and never end */
-    if (grown > SIZE_MAX / element_size)
-        return 0;
+        grown *= 2;
+    if (grown > most)
+        grown = needed;
     void *bigger = realloc(*data, grown * element_size);
     if (!bigger)
         return 0;
