@@ -190,7 +190,8 @@ pz_status pz_cli_pipeline_options(const pz_cli_args *args, pz_run_options *optio
     if (args->positional_count > 1 && args->pose_path_count > 0)
         return pz_error(ctx, PZ_ERR_USAGE, "flatten: --pose works with one MESH, not %d panel files",
                         args->positional_count);
-    return PZ_OK;
+    /* Before any work: a folder that cannot receive the result is exit 73 at once, not after minutes. */
+    return pz_output_folder_check(args->output_path, ctx);
 }
 
 pz_status pz_cli_outputs(const pz_cli_args *args, unsigned *outputs, pz_ctx *ctx)

@@ -192,6 +192,11 @@ pz_status pz_output_commit(pz_output *out, pz_ctx *ctx)
 {
     int failed = ferror(out->file);
     int saved = errno;
+    /* On the disk before the rename, so a crash leaves the old file or the whole new one. */
+    if (!failed && (fflush(out->file) != 0 || (fsync(fileno(out->file)) != 0 && errno != EINVAL))) {
+        failed = 1;
+        saved = errno;
+    }
     if (fclose(out->file) != 0 && !failed) {
         failed = 1;
         saved = errno;

@@ -156,7 +156,8 @@ double pz_round(double value, int decimals);
  *   if ((st = pz_output_open(&out, path, "wb", ctx))) return st;
  *   ... write to out.file ...
  *   return pz_output_commit(&out, ctx);   (or pz_output_abort(&out) on error)
- * pz_output_commit checks write errors (ferror, fclose) and reports
+ * pz_output_commit flushes and syncs the file, checks write errors (ferror,
+ * fsync, fclose) and reports
  * PZ_ERR_CREATE naming PATH. pz_output_abort closes and removes the temporary.
  */
 typedef struct pz_output {

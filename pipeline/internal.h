@@ -185,6 +185,23 @@ int pl_faces_by_panel(const pz_pattern *pattern, int32_t **offsets, int32_t **or
 /** layout.obj: the layout curves on the garment, in the input's units. */
 pz_status pl_write_layout_obj(const pz_result *result, FILE *file, pz_ctx *ctx);
 
+/* ---------------------------------------------------------------- folder.c */
+
+/** An output folder being written: the hidden folder beside it, swapped in on commit. */
+typedef struct pl_folder {
+    char *target, *parent, *name;   /* the folder asked for, its parent and its last component */
+    char *hidden;                   /* PARENT/.NAME.tmp-PID: where the files are written */
+    int lock_fd;                    /* the parent, locked while this writer works (-1: no lock) */
+    int committed;
+} pl_folder;
+
+/** Checks the folder (pz_output_folder_check), takes the parent's lock, clears dead runs' leftovers, makes the hidden folder. */
+pz_status pl_folder_begin(const char *folder, pl_folder *out, pz_ctx *ctx);
+/** Writes the marker (the files' names) last, syncs, and swaps the hidden folder in for the target. */
+pz_status pl_folder_commit(pl_folder *folder, const char *const *files, int file_count, pz_ctx *ctx);
+/** Removes the hidden folder unless committed, releases the lock, frees. */
+void pl_folder_end(pl_folder *folder);
+
 /** garment.obj: `v` = positions_out, `vt` = uv, the garment's faces with `g panel_K` groups. */
 pz_status pl_write_garment_obj(FILE *file, const pz_mesh *garment, const double *positions,
                                const pz_pattern *pattern, const double *uv, pz_ctx *ctx);

@@ -28,6 +28,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 static pz_mesh *bodice(int32_t faces, int32_t poses)
 {
@@ -215,6 +216,16 @@ static void test_write_outputs(void)
         CHECK(!file_exists(folder, others[i]), "%s written though not asked for", others[i]);
     CHECK(report && strstr(report, "\"goals_met\""), "report text not returned");
     free(report);
+    CHECK(file_exists(folder, ".panelize"), "no marker: the folder cannot be told from someone else's");
+    /* Written again with other files: the set is replaced whole (no stale pattern.svg), nothing left beside. */
+    REQUIRE_OK(pz_outputs_parse("dxf", &outputs, &ctx), ctx);
+    REQUIRE_OK(pz_result_write(result, folder, outputs, NULL, &ctx), ctx);
+    CHECK(file_exists(folder, "pattern.dxf") && !file_exists(folder, "pattern.svg") &&
+              !file_exists(folder, "report.json"),
+          "the earlier set's files stayed beside the new one");
+    char hidden[600];
+    snprintf(hidden, sizeof hidden, "%s/.some.tmp-%ld", test_temp_dir, (long)getpid());
+    CHECK(!file_exists(hidden, "."), "the hidden folder stayed: %s", hidden);
 
     /* Everything: every file of a run. */
     test_temp_path(folder, sizeof folder, "all");
