@@ -8,10 +8,12 @@
 #include "core/core.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -162,6 +164,32 @@ static char *duplicate_string(const char *text)
     if (copy)
         memcpy(copy, text, length + 1);
     return copy;
+}
+
+pz_status pz_input_open(const char *path, FILE **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    /* O_NONBLOCK: opening a FIFO with no writer must not wait; it is refused below. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
+        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    struct stat info;
+    const char *problem = NULL;
+    if (fstat(fd, &info) != 0)
+        problem = strerror(errno);
+    else if (S_ISDIR(info.st_mode))
+        problem = strerror(EISDIR);
+    else if (!S_ISREG(info.st_mode))
+        problem = "not a regular file (a pipe, a device or a socket)";
+    if (!problem && fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK) != 0)
+        problem = strerror(errno);
+    FILE *file = problem ? NULL : fdopen(fd, "rb");
+    if (!file) {
+        close(fd);
+        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, problem ? problem : strerror(errno));
+    }
+    *out = file;
+    return PZ_OK;
 }
 
 pz_status pz_output_open(pz_output *out, const char *path, const char *mode, pz_ctx *ctx)

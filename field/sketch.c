@@ -94,9 +94,10 @@ pz_status pz_sketch_parse(const char *text, size_t size, const char *name, doubl
 pz_status pz_sketch_read(const char *path, double scale, pz_sketch **out, pz_ctx *ctx)
 {
     *out = NULL;
-    FILE *file = fopen(path, "rb");
-    if (!file)
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    pz_status opened = pz_input_open(path, &file, ctx);
+    if (opened != PZ_OK)
+        return opened;
     char *text = NULL;
     size_t size = 0, capacity = 0;
     for (;;) {
