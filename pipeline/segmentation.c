@@ -152,10 +152,15 @@ static pz_status gather_sketch(const pl_segmenter *seg, const pz_mesh *mesh, pz_
 {
     *out = NULL;
     pz_sketch *from_file = NULL;
-    if (seg->options->sketch_path) {
-        pz_status status = pz_sketch_read(seg->options->sketch_path, mesh->unit_scale, &from_file, ctx);
-        if (status != PZ_OK)
-            return status;
+    pz_status status = pz_sketch_check(seg->options->sketch, mesh, "sketch", ctx);
+    if (status == PZ_OK && seg->options->sketch_path) {
+        status = pz_sketch_read(seg->options->sketch_path, mesh->unit_scale, &from_file, ctx);
+        if (status == PZ_OK)
+            status = pz_sketch_check(from_file, mesh, seg->options->sketch_path, ctx);
+    }
+    if (status != PZ_OK) {
+        pz_sketch_free(&from_file);
+        return status;
     }
     pz_sketch *sketch = calloc(1, sizeof *sketch);
     int ok = sketch && sketch_append(sketch, seg->options->sketch) && sketch_append(sketch, from_file) &&

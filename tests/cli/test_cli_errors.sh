@@ -146,4 +146,13 @@ for sparse in sparse.ply sparse.obj sparse.glb; do
     expect_error 65 "$sparse" -- info $sparse
 done
 
+# A sketch far off the garment (other units, another garment, 1e306) is refused at once, naming the
+# curve, the point and the distance; it used to hang the field's snapping.
+"$BIN" generate bodice -o sk-bodice.obj --faces 2000 --quiet
+printf '{"curves":[[[1e306,0,0],[0,1e306,0]]]}' >far-sketch.json
+expect_error 65 "far-sketch.json: curve 0 point 0" --absent sk1 -- field sk-bodice.obj -o sk1 --sketch far-sketch.json
+expect_error 65 "far-sketch.json: curve 0 point 0" --absent sk2 -- run sk-bodice.obj -o sk2 --sketch far-sketch.json
+printf '{"curves":[[[0,0,0],[1700000,0,0]]]}' >km-sketch.json
+expect_error 65 "km-sketch.json: curve 0" --absent sk3 -- run sk-bodice.obj -o sk3 --sketch km-sketch.json
+
 finish
