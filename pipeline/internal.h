@@ -12,6 +12,7 @@
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
+ *   names.c        the pieces' names from their place on the garment
  *   report.c       report.json (pz_result_report)
  *   write.c        pz_result_write: every file, all or nothing
  *

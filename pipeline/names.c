@@ -166,8 +166,8 @@ static void frame_axes(const pz_result *result, frame *f)
 
 
 
-/* The openings' shapes and kinds: the highest is the top; below mid-height, a left and right pair off the
- * centre are legs and the largest on the centre is the hem; above it, off the centre, arms. */
+/* The openings' shapes and kinds: the highest on the centre is the top; below mid-height, a left and right
+ * pair off the centre are legs and the largest on the centre is the hem; above it, off the centre, arms. */
 static void classify_openings(const pz_mesh *mesh, const pz_loops *loops, const frame *f, opening *openings)
 {
     double mid = 0.5 * (f->height_lo + f->height_hi), highest = -INFINITY;
@@ -190,9 +190,15 @@ static void classify_openings(const pz_mesh *mesh, const pz_loops *loops, const 
             pz_vec3_sub(mesh->positions + 3 * loops->loop_vertices[first + i], o->centroid, d);
             o->half_width = fmax(o->half_width, fabs(pz_vec3_dot(f->left, d)));
         }
-        if (pz_vec3_dot(f->up, o->centroid) > highest)
-            highest = pz_vec3_dot(f->up, o->centroid), top = l;
     }
+    /* The top: the highest opening on the centre (raised arms put cuffs higher than the neck), else the
+     * highest of all. */
+    for (int pass = 0; pass < 2 && top < 0; ++pass)
+        for (int32_t l = 0; l < loops->loop_count; ++l) {
+            int off_centre = fabs(along(f, f->left, openings[l].centroid)) > OFF_CENTRE_SHARE * f->half_width;
+            if ((pass == 1 || !off_centre) && pz_vec3_dot(f->up, openings[l].centroid) > highest)
+                highest = pz_vec3_dot(f->up, openings[l].centroid), top = l;
+        }
     int32_t legs_left = 0, legs_right = 0, hem = -1;
     for (int32_t l = 0; l < loops->loop_count; ++l) {
         opening *o = &openings[l];
@@ -360,6 +366,7 @@ typedef struct garment_parts {
     double total_area, torso_half_width;
     int has_arms;
     int32_t *limb_panels;   /* per opening: the panels that belong to it as a limb */
+    double *limb_centre;    /* per opening: 3, the area centroid of those panels */
 } garment_parts;
 
 static int sign_of(double x)
@@ -379,8 +386,9 @@ static int limb_name(const frame *f, const opening *o, const panel_place *place,
     else
         return 0;
     if (parts->limb_panels[opening_index] > 1) {
+        /* Its front or back half: ahead of the limb's own centre or behind it (a leg in a stride leans). */
         double d[3];
-        pz_vec3_sub(place->centroid, o->centroid, d);
+        pz_vec3_sub(place->centroid, parts->limb_centre + 3 * opening_index, d);
         size_t used = strlen(name->stem);
         snprintf(name->stem + used, sizeof name->stem - used, "%s", pz_vec3_dot(f->front, d) > 0 ? "_front" : "_back");
     }
@@ -521,8 +529,11 @@ static pz_status name_all(const pz_result *result, const pz_topology *topology, 
     int32_t *on_loop = malloc((size_t)mesh->vertex_count * sizeof(int32_t) + 1);
     panel_place *places = calloc((size_t)panels + 1, sizeof *places);
     piece_name *names = calloc((size_t)panels + 1, sizeof *names);
-    garment_parts parts = {0, 0, 0, calloc((size_t)count + 1, sizeof(int32_t))};
-    pz_status status = openings && nearest && on_loop && places && names && parts.limb_panels
+    garment_parts parts = {0, 0, 0, calloc((size_t)count + 1, sizeof(int32_t)),
+                           calloc(3 * (size_t)count + 1, sizeof(double))};
+    double *limb_area = calloc((size_t)count + 1, sizeof(double));
+    pz_status status = openings && nearest && on_loop && places && names && parts.limb_panels && parts.limb_centre &&
+                               limb_area
                            ? PZ_OK
                            : pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory naming the pieces");
     if (status == PZ_OK) {
@@ -549,9 +560,16 @@ static pz_status name_all(const pz_result *result, const pz_topology *topology, 
             int32_t o = places[p].opening;
             if (o >= 0 && (openings[o].kind == LOOP_LEG ||
                            (openings[o].kind == LOOP_ARM &&
-                            fabs(along(&f, f.left, places[p].centroid)) > parts.torso_half_width)))
+                            fabs(along(&f, f.left, places[p].centroid)) > parts.torso_half_width))) {
                 ++parts.limb_panels[o];
+                limb_area[o] += places[p].area;
+                for (int k = 0; k < 3; ++k)
+                    parts.limb_centre[3 * o + k] += places[p].area * places[p].centroid[k];
+            }
         }
+        for (int32_t o = 0; o < count; ++o)
+            for (int k = 0; k < 3 && limb_area[o] > 0; ++k)
+                parts.limb_centre[3 * o + k] /= limb_area[o];
         const int32_t *mirror = result->panel_mirror;
         for (int32_t p = 0; p < panels; ++p)
             name_panel(&f, openings, &places[p], &parts, mirror && mirror[p] == p, &names[p]);
@@ -564,6 +582,8 @@ static pz_status name_all(const pz_result *result, const pz_topology *topology, 
     free(places);
     free(names);
     free(parts.limb_panels);
+    free(parts.limb_centre);
+    free(limb_area);
     return status;
 }
 

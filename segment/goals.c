@@ -26,6 +26,10 @@
  *     a turn corner must be the largest turn within that window and lie
  *     farther than the window from every junction corner (one geometric
  *     corner counts once).
+ *  3b. Piece shape (docs/segment.md, "Piece shapes"): the panel's share of
+ *     the garment's area and its width (pz_piece_width over the opened
+ *     panel), and whether the input forces them (a whole component; narrow
+ *     by its border rather than by a seam).
  *  4. Strain and injectivity, only for a disk within the corner bound (a
  *     panel failing those must be split anyway): the panel is extracted (its
  *     vertices split at pinches only), turned into a one-panel pz_pattern
@@ -33,7 +37,8 @@
  *     with the dart term), flattened by pz_param_textile (few iterations,
  *     one thread: callers evaluate panels in parallel) and measured with
  *     pz_metrics_compute: the worst |warp| or |weft| strain, flipped
- *     triangles and boundary self-intersections.
+ *     triangles and boundary self-intersections, the extent across the
+ *     grain and the darts' intakes.
  *
  * Cost: O(F_panel) for 1-3 plus the flood fills of the neighbouring panels
  * (O(F) at worst, scratch of O(F) per call), and the flattening (a few

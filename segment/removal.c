@@ -26,10 +26,16 @@
  * Limits (Sec. 3.1): the open part at least DART_MIN_PIECES pieces and at
  * most DART_MAX_EXTENT_FRACTION of the merged panel's extent (its
  * bounding-box diagonal: "the dart length usually should not exceed a
- * fraction of the patch length"), and every dart of the panel opening by at
+ * fraction of the patch length"), every dart of the panel opening by at
  * least DART_MIN_OPENING_DEG in the flattening ("opening angles sufficiently
- * large"). A dart adds no corner (segment/goals.c), so re-gluing part of a
- * seam is judged on strain and injectivity, as a pattern maker would.
+ * large") and taking in min_dart_intake_mm at its mouth (a goal of the
+ * judge), and the panel's strain below that of the segment fully glued (a
+ * dart takes in fabric where the closed seam strains it). A dart adds no
+ * corner (segment/goals.c), so re-gluing part of a seam is judged on strain
+ * and injectivity, as a pattern maker would.
+ *
+ * Slivers: what is left under a piece-shape goal at the end is merged into a
+ * neighbour, trading strain alone (seg_merge_slivers, below).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */

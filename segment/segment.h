@@ -24,7 +24,12 @@
  *    the outline is taken with its darts closed: a dart adds no corner;
  *  - its flattening (LSCM start + a few textile iterations, grain given) is
  *    injective and every triangle's warp and weft strain lies within
- *    +-max_strain.
+ *    +-max_strain;
+ *  - piece shapes: at least min_piece_width_mm wide and min_piece_area of
+ *    the garment's area unless the input makes it so, at most
+ *    max_piece_width_mm across the grain, every dart taking in at least
+ *    min_dart_intake_mm (a split never answers a shape goal: pieces left
+ *    under one are merged into a neighbour at the end, even over S).
  *
  * Conventions of mesh/mesh.h. Deterministic: the result never depends on
  * the thread count or timing.

@@ -30,6 +30,8 @@
  *  - the skirt of ../shared/data (when present): at least one dart, every
  *    dart taking in at least 6 mm; asked for twice its smallest intake, no
  *    dart taking in less is kept;
+ *  - the 3K bodice at S = 0.005 cuts pieces under 40 mm or 1 % of its area
+ *    without the shape goals, and none with them (merged, S missed and said);
  *  - the wetsuit of ../shared/data (when present): without the shape goals,
  *    goals met, which needs the fallback cut through its vertex of large
  *    angle excess (and leaves slivers); with them, no sliver: they are
@@ -745,10 +747,72 @@ static void test_wetsuit(void)
     garment_free(&g);
 }
 
+/* The panels of a layout that miss a piece-shape goal at the defaults (40 mm, 1 %), judged here. */
+static int32_t shape_misses(const garment *g, const pz_segment_result *result)
+{
+    pz_goal_options goals;
+    pz_goal_options_default(&goals);
+    goals.textile_iterations = -1;  /* the shape alone */
+    int32_t *ids = malloc((size_t)g->mesh->face_count * sizeof(int32_t)), misses = 0;
+    REQUIRE(ids, "out of memory");
+    for (int32_t p = 0; p < result->panel_count; ++p) {
+        int32_t count = 0;
+        for (int32_t f = 0; f < g->mesh->face_count; ++f)
+            if (result->face_panel[f] == p)
+                ids[count++] = f;
+        pz_goal_result figures;
+        REQUIRE_OK(pz_segment_goals(g->mesh, g->topology, result->edge_cut, ids, count, &goals, &figures, &ctx), ctx);
+        misses += (figures.failures & PZ_GOAL_SHAPE) != 0;
+    }
+    free(ids);
+    return misses;
+}
+
+/*
+ * A layout that would cut slivers does not (docs/segment.md, "Piece shapes"): the 3K bodice at S = 0.005
+ * without the shape goals ends with pieces under 40 mm or 1 % of its area; with them, none is left, and
+ * the panels that took the slivers in miss S alone, and say so.
+ */
+static void test_slivers(void)
+{
+    garment g = generated(PZ_SHAPE_BODICE, 3000);
+    pz_segment_options options;
+    pz_segment_options_default(&options);
+    options.max_strain = 0.005;
+    options.min_piece_width_mm = options.min_piece_area = 0;
+    pz_segment_result *confetti = NULL;
+    REQUIRE_OK(pz_segment(g.mesh, g.topology, g.field, &options, &confetti, &ctx), ctx);
+    int32_t before = shape_misses(&g, confetti);
+    CHECK(before > 0, "bodice S 0.005 without shape goals: no sliver (%d panels): the test needs some",
+          (int)confetti->panel_count);
+    pz_segment_options_default(&options);
+    options.max_strain = 0.005;
+    pz_segment_result *result = NULL;
+    REQUIRE_OK(pz_segment(g.mesh, g.topology, g.field, &options, &result, &ctx), ctx);
+    int32_t after = shape_misses(&g, result), narrow = 0;
+    for (int32_t p = 0; p < result->panel_count; ++p) {
+        const pz_goal_result *goals = &result->panels[p].goals;
+        narrow += (goals->failures & PZ_GOAL_SHAPE) != 0;
+        CHECK(!(goals->failures & ~(unsigned)(PZ_GOAL_STRAIN | PZ_GOAL_SHAPE)), "bodice S 0.005: panel %d misses %u",
+              (int)p, goals->failures);
+    }
+    CHECK(after == 0 && narrow == 0 && result->merged_slivers > 0 && result->panel_count < confetti->panel_count,
+          "bodice S 0.005: %d slivers judged here, %d said, %d merged (%d panels, %d without the goals)",
+          (int)after, (int)narrow, (int)result->merged_slivers, (int)result->panel_count,
+          (int)confetti->panel_count);
+    printf("bodice S 0.005: %d panels (%d slivers) without the shape goals, %d with them (%d slivers merged), "
+           "%s\n", (int)confetti->panel_count, (int)before, (int)result->panel_count, (int)result->merged_slivers,
+           result->goals_met ? "goals met" : result->reasons);
+    pz_segment_result_free(&confetti);
+    pz_segment_result_free(&result);
+    garment_free(&g);
+}
+
 int main(void)
 {
     pz_ctx_init(&ctx);
     ctx.quiet = 1;
+    test_slivers();
     test_bodice();
     test_skirt();
     test_unreachable();
