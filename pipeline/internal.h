@@ -12,6 +12,7 @@
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
+ *   names.c        the pieces' names from their place on the garment
  *   report.c       report.json (pz_result_report)
  *   write.c        pz_result_write: every file, all or nothing
  *
@@ -162,17 +163,27 @@ double *pl_strain_of_poses(const pz_pattern *pattern, const double *uv, const pz
 
 /**
  * Judges every panel of `pattern` against `goals` with the one goal judge:
- * disk and corners on the garment's cut outline, strain and injectivity on
- * the flattening (metrics: the rest pose; pose_strain, may be NULL: each
- * panel's worst strain over the extra poses), seam and dart length mismatch
- * from the metrics. panels (pattern->panel_count) receives each panel's
+ * disk, corners, area share and whether the input forces a narrow or small
+ * piece on the garment's cut outline; strain and injectivity on the
+ * flattening (metrics: the rest pose; pose_strain, may be NULL: each panel's
+ * worst strain over the extra poses); seam and dart length mismatch and dart
+ * intakes from the metrics; the piece's width and its extent across the grain
+ * on the pattern (uv). panels (pattern->panel_count) receives each panel's
  * figures and failure bits.
  */
-pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const pz_metrics *metrics,
-                          const double *pose_strain, const pz_goal_options *goals, pz_goal_result *panels, pz_ctx *ctx);
+pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const double *uv,
+                          const pz_metrics *metrics, const double *pose_strain, const pz_goal_options *goals,
+                          pz_goal_result *panels, pz_ctx *ctx);
 
 /** The final verdict of a result (goals met, reasons, one note when missed) from its metrics. */
 pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx);
+
+/**
+ * Names the segmentation's pieces after their place on the garment (front_left, back, sleeve_right, collar,
+ * ...: docs/run.md, "Piece names") into result->panel_names; mirror partners (result->panel_mirror) get the
+ * same name with the other side. Nothing to do when the panels have names (the user's groups or files).
+ */
+pz_status pl_name_pieces(pz_result *result, pz_ctx *ctx);
 
 /** The flattened pieces' own mirror symmetry (result->pattern_mirror_*), when the layout found a plane. */
 void pl_measure_pattern_symmetry(pz_result *result, pz_ctx *ctx);

@@ -38,7 +38,7 @@ static int32_t failing_panels(const seg_layout *layout)
 {
     int32_t failing = 0;
     for (int32_t p = 0; p < layout->panel_count; ++p)
-        failing += layout->panel_goals[p].failures != 0;
+        failing += (layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS) != 0;
     return failing;
 }
 
@@ -82,7 +82,7 @@ static int splits_failing(const seg_layout *layout, const pz_trace_path *path)
         int32_t e = seg_edge_between(layout, path->vertices[i], path->vertices[(i + 1) % n]);
         if (e < 0 || layout->edge_cut[e] || t->edge_halfedge[2 * e + 1] < 0)
             continue;
-        if (layout->panel_goals[layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]].failures)
+        if (layout->panel_goals[layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]].failures & PZ_GOAL_SPLIT_MENDS)
             return 1;
     }
     return 0;
@@ -384,7 +384,7 @@ static pz_status recurse_failing(seg_layout *layout, int32_t *inserted, pz_ctx *
         return nomem(ctx);
     pz_status status = PZ_OK;
     for (int32_t p = 0; p < panels && !status; ++p) {
-        if (!layout->panel_goals[p].failures)
+        if (!(layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS))
             continue;
         if ((status = pz_check_cancel(ctx, "segment")))
             break;

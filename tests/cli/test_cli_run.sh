@@ -50,6 +50,17 @@ report_checks "run bodice symmetry" bodice2 \
     "0 <= d['segmentation']['symmetry']['pattern_residual_mm'] < 0.5 and d['segmentation']['symmetry']['pattern_residual_max_mm'] < 3.0" \
     "panels not in mirror pairs" \
     "all(p['mirror_panel'] >= 0 and d['panels'][p['mirror_panel']]['mirror_panel'] == p['id'] for p in d['panels'])"
+# Piece names and shapes in report.json: every piece named, no two alike, a mirror pair named alike but for
+# its side; each piece's width, area share and extent across the grain; each dart's intake.
+report_checks "run bodice names" bodice2 \
+    "a piece without a name or two alike: $(grep -o '"name": "[^"]*' bodice2/report.json | tr '\n' ' ')" \
+    "len(set(p['name'] for p in d['panels'])) == len(d['panels']) and all(p['name'] for p in d['panels'])" \
+    "mirror partners not named X_left / X_right" \
+    "all(p['mirror_panel'] == p['id'] or sorted([p['name'], d['panels'][p['mirror_panel']]['name']]) == sorted([p['name'].replace('_right', '_left'), p['name'].replace('_left', '_right')]) for p in d['panels'])" \
+    "no piece-shape figures" \
+    "all(p['width_mm'] > 0 and 0 < p['area_share'] <= 1 and p['across_grain_mm'] > 0 for p in d['panels'])" \
+    "a dart without its intake" "all(x['intake_mm'] >= 0 for x in d['darts'])" \
+    "no count of merged slivers" "d['segmentation']['merged_slivers'] >= 0"
 check "layout.obj has polylines" grep -q '^l ' bodice2/layout.obj
 
 # Same input, same output, whatever the thread count: every file, byte for
@@ -303,6 +314,25 @@ printf '{"curves": [[[0,0,0]]]}' >short-sketch.json
 expect_error 65 "short-sketch.json" --absent bad8 -- run bodice.obj -o bad8 --sketch short-sketch.json
 expect_error 64 "--outputs" --absent bad9 -- run bodice.obj -o bad9 --outputs svg,pdfx
 expect_error 64 "--max-seam-mismatch" --absent bad10 -- run bodice.obj -o bad10 --max-seam-mismatch -0.1
+expect_error 64 "--min-piece-width" --absent bad11 -- run bodice.obj -o bad11 --min-piece-width -1
+expect_error 64 "--min-piece-area" --absent bad12 -- run bodice.obj -o bad12 --min-piece-area 0.6
+expect_error 64 "--min-dart-intake" --absent bad13 -- run bodice.obj -o bad13 --min-dart-intake 6mm
+expect_error 64 "--strict" --absent bad14 -- run bodice.obj -o bad14 --strict=yes
+
+# --strict: a pattern that misses its goals exits 3 (docs/cli.md) once its files are written, with one line
+# naming why; one that meets them exits 0. Without --strict the same run exits 0.
+run run bodice.obj -o strict-miss --max-seam-mismatch 1e-9 --strict --quiet
+check "run --strict, goals not met: exit $rc, expected 3" [ "$rc" -eq 3 ]
+check "run --strict, goals not met: stderr is not one line 'panelize: run: goals not met (--strict): ...': \
+$(head -c 300 "$WORK/err")" grep -q '^panelize: run: goals not met (--strict): [0-9]* of [0-9]* panels miss' "$WORK/err"
+check "run --strict, goals not met: stderr has more than one line" one_line "$WORK/err"
+[ -s strict-miss/report.json ] && report_checks "run --strict, goals not met" strict-miss \
+    "goals_met is not false" "d['summary']['goals_met'] is False"
+check "run --strict, goals not met: no report.json" [ -s strict-miss/report.json ]
+run run bodice.obj -o strict-met --strict --quiet
+expect_ok "run --strict, goals met"
+run run bodice.obj -o lenient-miss --max-seam-mismatch 1e-9 --quiet
+expect_ok "run without --strict, goals not met"
 
 # --outputs: exactly the files asked for.
 run run bodice.obj -o some --outputs dxf,layout,json --quiet
