@@ -69,7 +69,11 @@ static pz_status prepare_automatically(const pz_run_options *options, pz_result 
     if (status != PZ_OK)
         return status;
     const pz_prepare_report *report = &result->prepared->report;
+    /* Any step that changed the mesh (an orientation flip keeps the counts) makes the prepared one the
+     * garment; the report steps say which ran. */
     int any_change = report->output_faces != report->input_faces || report->output_vertices != report->input_vertices;
+    for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i)
+        any_change |= report->steps[i].ran && i != PZ_PREPARE_HAUSDORFF && i != PZ_PREPARE_POSES;
     for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i) {
         const pz_prepare_step *step = &report->steps[i];
         /* A remesh that was tried and undone says why; one that was not needed stays quiet. */

@@ -363,4 +363,16 @@ check "run interrupted: the last line is not 'cancelled': $(tail -n 1 "$WORK/err
 check "run interrupted: wrote files" [ ! -e interrupted ]
 check "run interrupted: left a temporary file" no_temporaries
 
+# A mesh the automatic preparation repairs (one face turned the wrong way: the counts stay) is flattened,
+# not refused as the repair had never happened.
+python3 - <<'PY'
+lines = open('bodice.obj').read().split('\n')
+faces = [i for i, line in enumerate(lines) if line.startswith('f ')]
+p = lines[faces[10]].split()
+lines[faces[10]] = ' '.join([p[0], p[1], p[3], p[2]])
+open('flipped.obj', 'w').write('\n'.join(lines))
+PY
+run run flipped.obj -o flipped-out --quiet
+check "run of a mesh with one flipped face: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]
+
 finish
