@@ -312,6 +312,8 @@ printf 'v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n' >nan.obj
 expect_error 65 "nan.obj" --absent bad7 -- run nan.obj -o bad7 --prepare off
 printf '{"curves": [[[0,0,0]]]}' >short-sketch.json
 expect_error 65 "short-sketch.json" --absent bad8 -- run bodice.obj -o bad8 --sketch short-sketch.json
+expect_error 64 "--seam-allowance" --absent bad11 -- run bodice.obj -o bad11 --seam-allowance 1e300
+expect_error 64 "--hem-allowance" --absent bad12 -- run bodice.obj -o bad12 --hem-allowance 101
 expect_error 64 "--outputs" --absent bad9 -- run bodice.obj -o bad9 --outputs svg,pdfx
 expect_error 64 "--max-seam-mismatch" --absent bad10 -- run bodice.obj -o bad10 --max-seam-mismatch -0.1
 expect_error 64 "--min-piece-width" --absent bad11 -- run bodice.obj -o bad11 --min-piece-width -1
