@@ -196,6 +196,8 @@ typedef struct pz_result {
     pz_units units;                  /* the input's units */
     int units_guessed;
     double grain[3];                 /* the warp direction used */
+    double pose_edge_change_median;  /* extra poses: the relative change of the edge lengths against the rest */
+    double pose_edge_change_p95;     /* pose, median and 95th percentile over every edge and pose (0 without) */
     const char *grain_source;        /* "given", "vertical axis (y)", "vertical axis (z)" (static) */
     /* the panels and the pattern */
     const char *panels_source;       /* "segmentation", "file", "uv", "files", "groups", "components" (static) */

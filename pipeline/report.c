@@ -726,6 +726,12 @@ cJSON *pz_result_report(const pz_result *result)
         cJSON *marker = pz_marker_report_json(result->marker);
         failed |= !marker || !cJSON_AddItemToObject(root, "marker", marker);
     }
+    cJSON *input = root ? cJSON_GetObjectItem(root, "input") : NULL;
+    if (input && result->garment->pose_count > 0) {
+        cJSON *spread = cJSON_AddObjectToObject(input, "pose_edge_change");
+        failed |= !spread || !add_plain_number(spread, "median", pz_round(result->pose_edge_change_median, 6)) ||
+                  !add_plain_number(spread, "p95", pz_round(result->pose_edge_change_p95, 6));
+    }
     if (root && !failed && result->from_run)
         failed |= !extend_run_report(result, root);
     if (failed) {

@@ -377,4 +377,25 @@ PY
 run run flipped.obj -o flipped-out --quiet
 check "run of a mesh with one flipped face: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]
 
+# Poses that cannot be the same garment are refused (exit 65, naming the pose), not repaired: a
+# non-finite coordinate, or a pose in other units (ten times the rest pose's size).
+python3 - <<'PY'
+rest = [l for l in open('bodice.obj').read().split('\n')]
+def write(name, change):
+    out = []
+    seen = 0
+    for line in rest:
+        if line.startswith('v '):
+            x, y, z = map(float, line.split()[1:4])
+            out.append(change(seen, x, y, z))
+            seen += 1
+        else:
+            out.append(line)
+    open(name, 'w').write('\n'.join(out))
+write('pose-nan.obj', lambda i, x, y, z: 'v %r %r %r' % (float('nan') if i == 5 else x, y, z))
+write('pose-cm.obj', lambda i, x, y, z: 'v %r %r %r' % (10 * x, 10 * y, 10 * z))
+PY
+expect_error 65 "pose 1: vertex 5" --absent posebad1 -- run bodice.obj --pose pose-nan.obj -o posebad1
+expect_error 65 "pose 1 is" --absent posebad2 -- run bodice.obj --pose pose-cm.obj -o posebad2
+
 finish
