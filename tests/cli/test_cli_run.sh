@@ -398,4 +398,10 @@ PY
 expect_error 65 "pose 1: vertex 5" --absent posebad1 -- run bodice.obj --pose pose-nan.obj -o posebad1
 expect_error 65 "pose 1 is" --absent posebad2 -- run bodice.obj --pose pose-cm.obj -o posebad2
 
+# A valid mesh too coarse for the automatic preparation's density (a two-triangle strip) is kept as it
+# is and flattened: no usage error the user did not make.
+printf 'v 0 0 0\nv 1000 0 0\nv 1000 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n' >strip.obj
+run run strip.obj -o strip-out --quiet
+check "run of a two-triangle strip: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]
+
 finish
