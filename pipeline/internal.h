@@ -166,10 +166,13 @@ double *pl_strain_of_poses(const pz_pattern *pattern, const double *uv, const pz
  * the flattening (metrics: the rest pose; pose_strain, may be NULL: each
  * panel's worst strain over the extra poses), seam and dart length mismatch
  * from the metrics. panels (pattern->panel_count) receives each panel's
- * figures and failure bits.
+ * figures and failure bits. segment (may be NULL): the layout, when its
+ * panels are the pattern's: a mirror pair is one pattern piece, so the copy
+ * of a pair (pz_segment_panel.copy) takes its partner's corners.
  */
 pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const pz_metrics *metrics,
-                          const double *pose_strain, const pz_goal_options *goals, pz_goal_result *panels, pz_ctx *ctx);
+                          const double *pose_strain, const pz_goal_options *goals, const pz_segment_result *segment,
+                          pz_goal_result *panels, pz_ctx *ctx);
 
 /** The final verdict of a result (goals met, reasons, one note when missed) from its metrics. */
 pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx);

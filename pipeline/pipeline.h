@@ -226,6 +226,12 @@ typedef struct pz_result {
     int looser_seeded;
     double pattern_mirror_rms_mm;    /* mirror symmetry of the flattened pieces; -1 when not measured */
     double pattern_mirror_max_mm;
+    /* The mirror plane (docs/segment.md, "Symmetry"): found or given before the field (its figures only: the
+     * maps are NULL; the layout's own copy is segment->symmetry), whether the layout used it, and the panel
+     * counts of the first layouts with and without it (-1: not made). */
+    pz_symmetry symmetry;
+    int symmetry_used;
+    int32_t pieces_with_symmetry, pieces_without_symmetry;
     /* export */
     char *garment_name;              /* the name on the pieces (options.output.garment_name points here when the
                                         options named none: the input's base name) */

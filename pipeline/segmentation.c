@@ -71,6 +71,12 @@ struct pl_segmenter {
     pz_truing_result truing_result;
     pz_mesh *garment;                   /* the garment last segmented (for the verdict's goals) */
     pz_field *field;                    /* the cross-field of the original surface, computed once */
+    /* The mirror plane (docs/segment.md, "Symmetry"): detected (or the user's) once, before the field. */
+    pz_symmetry symmetry;
+    pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
+    int symmetry_decided;               /* 1: the first layouts with and without the plane compared */
+    int symmetry_used;                  /* 1: the layouts are made on one half and mirrored */
+    int32_t pieces_with, pieces_without; /* the first layouts' panel counts (-1: not made) */
     /* Monotone panel counts (ladder_cuts): the looser settings' final cuts, seeded into this run's layout. */
     int ladder_done;                    /* 1: the layout and its verdict rounds were made by solve_setting */
     int seeded;                         /* 1: its own layout had fewer panels than a looser setting's: seeded */
@@ -208,6 +214,10 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     options.user = progress;
     options.vetoed = goals->vetoed;
     options.vetoed_count = goals->vetoed_count;
+    /* The plane the pipeline detected (or was given) once: the segmentation uses it as given, or none. */
+    options.symmetry = seg->symmetry_used ? PZ_SYMMETRY_PLANE : PZ_SYMMETRY_OFF;
+    memcpy(options.symmetry_plane, seg->symmetry.normal, sizeof seg->symmetry.normal);
+    options.symmetry_plane[3] = seg->symmetry.offset;
     if (!goals->cache && !(goals->cache = pz_segment_cache_create()))
         return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
     options.cache = goals->cache;
@@ -218,7 +228,77 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     if (goals->verdict_rounds > 0)
         pz_note(progress, "run: segment again (round %d): the joint flattening rejected %s",
                 (int)goals->verdict_rounds + 1, goals->verdict_reasons);
-    return pz_segment(garment, topology, seg->field, &options, out, ctx);
+    return pz_segment(garment, topology, seg->symmetry_used ? seg->mirror_field : seg->field, &options, out, ctx);
+}
+
+/*
+ * The mirror plane, once, before the field: found (AUTO, within its
+ * tolerance) or given (an axis, or the user's plane in the input's units),
+ * and the field symmetrized about it (pz_field_mirrored) for the layouts made
+ * with it. The plain field stays for the layout without it.
+ */
+static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_topology *topology, pz_ctx *ctx)
+{
+    const pz_segment_options *given = &seg->options->segment;
+    double plane[4];
+    memcpy(plane, given->symmetry_plane, sizeof plane);
+    plane[3] *= garment->unit_scale; /* the user's plane is in the input's units, the garment in millimetres */
+    pz_status status = pz_symmetry_detect(garment, topology, given->symmetry, plane, 0, &seg->symmetry, ctx);
+    seg->pieces_with = seg->pieces_without = -1;
+    seg->symmetry_used = status == PZ_OK && seg->symmetry.found;
+    if (status == PZ_OK && seg->symmetry.found)
+        status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
+                                   &seg->mirror_field, ctx);
+    if (status == PZ_OK && given->symmetry != PZ_SYMMETRY_OFF)
+        pz_note(ctx, "run: symmetry: %s plane (%.4f, %.4f, %.4f) . p = %.2f mm, the garment within %.2f mm of its "
+                "mirror image (%.2f %% of its diagonal)", seg->symmetry.found ? "" : "no good enough",
+                seg->symmetry.normal[0], seg->symmetry.normal[1], seg->symmetry.normal[2], seg->symmetry.offset,
+                seg->symmetry.residual_mm, 100 * seg->symmetry.residual_rel);
+    return status;
+}
+
+/*
+ * With a plane: the first layout made on one half and mirrored, and the
+ * layout without the plane; the plane stays when its layout has no more
+ * panels. Finding or forcing a plane must never multiply the pieces (a
+ * mirrored layout pays every split twice): otherwise the run says so and goes
+ * on without it, as --symmetry off would. *out: the layout kept (NULL: only
+ * compared, for a caller that makes its own).
+ */
+static pz_status choose_symmetry(pl_segmenter *seg, const pz_mesh *garment, const pz_topology *topology,
+                                 const pz_sketch *sketch, goal_setting *goals, pz_segment_result **out, pz_ctx *ctx)
+{
+    seg->symmetry_decided = 1;
+    if (!seg->symmetry_used)
+        return out ? segment_once(seg, garment, topology, sketch, goals, NULL, ctx, out, ctx) : PZ_OK;
+    pz_ctx quiet;
+    pz_ctx_quiet(ctx, &quiet);
+    pz_segment_result *with = NULL, *without = NULL;
+    pz_status status = segment_once(seg, garment, topology, sketch, goals, NULL, ctx, &with, ctx);
+    seg->symmetry_used = 0;
+    if (status == PZ_OK)
+        status = segment_once(seg, garment, topology, sketch, goals, NULL, &quiet, &without, ctx);
+    if (status == PZ_OK) {
+        seg->pieces_with = with->panel_count;
+        seg->pieces_without = without->panel_count;
+        seg->symmetry_used = with->panel_count <= without->panel_count;
+        if (!seg->symmetry_used)
+            pz_note(ctx, "run: symmetry: the layout made on one half and mirrored has %d panels, without the plane "
+                    "%d: the plane is not used", (int)with->panel_count, (int)without->panel_count);
+        else
+            pz_note(ctx, "run: symmetry: the layout made on one half and mirrored has %d panels (%d without the "
+                    "plane)", (int)with->panel_count, (int)without->panel_count);
+    }
+    if (status == PZ_OK && out) {
+        *out = seg->symmetry_used ? with : without;
+        if (seg->symmetry_used)
+            with = NULL;
+        else
+            without = NULL;
+    }
+    pz_segment_result_free(&with);
+    pz_segment_result_free(&without);
+    return status;
 }
 
 pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choice *choice, pz_ctx *ctx)
@@ -240,10 +320,12 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         options.use_poses = 1;
         pl_stage(ctx, "field", 0.1, 0.2, "cross-field");
         status = pz_field_compute(garment, topology, &options, &seg->field, ctx);
+        if (status == PZ_OK)
+            status = find_plane(seg, garment, topology, ctx);
         seg->field_ms = pz_elapsed_ms(start, pz_seconds());
         if (status == PZ_OK)
             pz_note(ctx, "run: field: %.0f ms, %d singularities", seg->field_ms,
-                    (int)seg->field->singularity_count);
+                    (int)(seg->mirror_field ? seg->mirror_field : seg->field)->singularity_count);
     }
     double field_end = pz_seconds();
     pl_stage(ctx, "segment", 0.2, 0.7, "layout");
@@ -256,7 +338,10 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         seg->ladder_done = 1;
         seg->field_singularities = seg->field->singularity_count;
         pz_segment_result_free(&seg->segment);
-        status = solve_setting(seg, garment, topology, sketch, seg->goals.goals.max_strain, seg->goals.goals.max_corners,
+        if (!seg->symmetry_decided)
+            status = choose_symmetry(seg, garment, topology, sketch, &seg->goals, NULL, ctx);
+        if (status == PZ_OK)
+            status = solve_setting(seg, garment, topology, sketch, seg->goals.goals.max_strain, seg->goals.goals.max_corners,
                                &seg->goals, &seg->segment, &seg->seeded, &seg->seed_panels, ctx);
         if (status == PZ_OK)
             status = keep_or_restore_original(seg, garment, ctx);
@@ -267,7 +352,10 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
     } else if (status == PZ_OK) {
         seg->field_singularities = seg->field->singularity_count;
         pz_segment_result_free(&seg->segment);
-        status = segment_once(seg, garment, topology, sketch, &seg->goals, NULL, ctx, &seg->segment, ctx);
+        if (!seg->symmetry_decided)
+            status = choose_symmetry(seg, garment, topology, sketch, &seg->goals, &seg->segment, ctx);
+        else
+            status = segment_once(seg, garment, topology, sketch, &seg->goals, NULL, ctx, &seg->segment, ctx);
     }
     seg->segment_ms = pz_elapsed_ms(field_end, pz_seconds());
     if (status == PZ_OK && seg->options->truing) {
@@ -533,15 +621,22 @@ static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_s
     /* Every goal, judged as the report will judge it: strain and injectivity on the joint flattening,
      * disk and corners on the trued outline, seam lengths on the pattern. */
     if (!bucketed || !judged || !grown ||
-        pl_judge_panels(garment, pattern, metrics, pose_strain, &goals->goals, judged, &quiet) != PZ_OK) {
+        pl_judge_panels(garment, pattern, metrics, pose_strain, &goals->goals, segment, judged, &quiet) != PZ_OK) {
         free(offsets), free(order), free(judged);
         return 1;
     }
+    /* A rejected panel's mirror image goes with it: vetoing one side alone would make the next layout
+     * differ between the sides (docs/segment.md, "Symmetry"). */
+    int mirrored = segment->symmetry.found && segment->panel_count == panels;
     for (int32_t p = 0; p < panels; ++p) {
-        if (!judged[p].failures)
+        int32_t m = mirrored ? segment->panels[p].mirror_panel : -1;
+        int rejected = judged[p].failures != 0;
+        if (!rejected && !(m >= 0 && m != p && judged[m].failures))
             continue;
         goals->vetoed[goals->vetoed_count + added++] =
             pz_segment_face_set_key(order + offsets[p], offsets[p + 1] - offsets[p]);
+        if (!rejected)
+            continue;
         /* Why, for the note the next round prints. */
         char text[256];
         pz_goal_describe(&judged[p], &goals->goals, text, sizeof text);
@@ -629,6 +724,8 @@ void pl_segmenter_free(pl_segmenter **segmenter)
         free(seg->rungs[i].cuts);
     free(seg->rungs);
     pz_field_free(&seg->field);
+    pz_field_free(&seg->mirror_field);
+    pz_symmetry_clear(&seg->symmetry);
     free(seg->original_positions);
     free(seg->original_poses);
     free(seg);
@@ -649,4 +746,9 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->timings.field = seg->field_ms;
     result->timings.segment = seg->segment_ms;
     result->timings.looser_goals = seg->ladder_ms;
+    result->symmetry = seg->symmetry; /* the plane's figures; its maps stay with the segmenter */
+    result->symmetry.vertex_mirror = NULL, result->symmetry.vertex_side = NULL, result->symmetry.face_mirror = NULL;
+    result->symmetry_used = seg->symmetry_used;
+    result->pieces_with_symmetry = seg->pieces_with;
+    result->pieces_without_symmetry = seg->pieces_without;
 }

@@ -44,9 +44,24 @@ static void seam_mismatch_by_panel(const pz_metrics *metrics, int32_t panel_coun
     }
 }
 
+/* The copy of a mirror pair is cut from its partner's piece, reflected: its outline's corners are the partner's. */
+static void judge_copies(const pz_segment_result *segment, const pz_goal_options *goals, int32_t panel_count,
+                         pz_goal_result *panels)
+{
+    if (!segment || segment->panel_count != panel_count)
+        return;
+    for (int32_t p = 0; p < panel_count; ++p) {
+        int32_t q = segment->panels[p].mirror_panel;
+        if (!segment->panels[p].copy || q < 0 || q >= panel_count || panels[p].corners < 0)
+            continue;
+        panels[p].corners = panels[q].corners;
+        panels[p].failures = pz_goal_judge(goals, &panels[p]);
+    }
+}
+
 pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const pz_metrics *metrics,
-                          const double *pose_strain, const pz_goal_options *goals, pz_goal_result *panels,
-                          pz_ctx *ctx)
+                          const double *pose_strain, const pz_goal_options *goals, const pz_segment_result *segment,
+                          pz_goal_result *panels, pz_ctx *ctx)
 {
     int32_t panel_count = pattern->panel_count;
     const int32_t *cut_faces = pattern->mesh->faces;  /* the garment's faces, in order, on cut-mesh copies */
@@ -94,6 +109,8 @@ pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, con
         figures->max_seam_mismatch = mismatch[p];
         figures->failures = pz_goal_judge(goals, figures);
     }
+    if (status == PZ_OK)
+        judge_copies(segment, goals, panel_count, panels);
     free(mismatch);
     free(edge_cut);
     free(face_offsets);
@@ -157,7 +174,8 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
     pz_status status =
-        pl_judge_panels(result->garment, pattern, result->metrics[0], pose_strain, &goals, verdict->panels, &quiet);
+        pl_judge_panels(result->garment, pattern, result->metrics[0], pose_strain, &goals, result->segment,
+                        verdict->panels, &quiet);
     free(pose_strain);
     if (status != PZ_OK)
         return pz_error(ctx, status, "%s", quiet.error);

@@ -35,7 +35,7 @@ static pz_mesh *bodice(void)
 static void test_detect_bodice(const pz_mesh *mesh, const pz_topology *topology)
 {
     pz_symmetry s;
-    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, 0.0, &s, &ctx), ctx);
+    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, NULL, 0.0, &s, &ctx), ctx);
     printf("bodice: axis %d, offset %g, residual %g mm (rel %g)\n", s.axis, s.offset, s.residual_mm, s.residual_rel);
     REQUIRE(s.found && s.axis == 0 && s.residual_rel < 1e-3 && fabs(s.offset) < 1.0 && s.normal[0] == 1.0,
             "bodice plane: found %d axis %d offset %g residual_rel %g", s.found, s.axis, s.offset, s.residual_rel);
@@ -57,12 +57,12 @@ static void test_detect_bodice(const pz_mesh *mesh, const pz_topology *topology)
     pz_symmetry_clear(&s);
     CHECK(s.vertex_mirror == NULL && s.found == 0, "clear");
 
-    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_Y, 0.0, &s, &ctx), ctx);
+    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_Y, NULL, 0.0, &s, &ctx), ctx);
     printf("bodice forced y: residual rel %g\n", s.residual_rel);
     CHECK(s.found && s.axis == 1 && s.residual_rel > 0.005, "forced y: found %d axis %d residual_rel %g", s.found,
           s.axis, s.residual_rel);
     pz_symmetry_clear(&s);
-    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_OFF, 0.0, &s, &ctx), ctx);
+    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_OFF, NULL, 0.0, &s, &ctx), ctx);
     CHECK(!s.found && s.axis == -1 && !s.vertex_mirror, "off");
     pz_symmetry_clear(&s);
 }
@@ -75,7 +75,7 @@ static void test_asymmetric(void)
             mesh->positions[3 * v] *= 1.5;
     pz_topology *topology = test_topology(mesh, &ctx);
     pz_symmetry s;
-    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, 0.0, &s, &ctx), ctx);
+    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, NULL, 0.0, &s, &ctx), ctx);
     printf("stretched bodice: found %d, best residual rel %g\n", s.found, s.residual_rel);
     CHECK(!s.found && s.axis == -1 && s.residual_rel > 0.005 && !s.vertex_mirror, "stretched: found %d rel %g",
           s.found, s.residual_rel);
@@ -113,7 +113,7 @@ static void test_mirror_paths(const pz_mesh *mesh, const pz_topology *topology)
     REQUIRE_OK(pz_trace_graph_build(mesh, topology, field->directions, NULL, &graph, &ctx), ctx);
     REQUIRE_OK(pz_trace_candidates(graph, mesh, topology, NULL, &paths, &ctx), ctx);
     pz_symmetry s;
-    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, 0.0, &s, &ctx), ctx);
+    REQUIRE_OK(pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, NULL, 0.0, &s, &ctx), ctx);
     REQUIRE(s.found, "no plane");
     int bad = 0, not_back = 0;
     for (int32_t i = 0; i < paths->path_count; ++i) {
