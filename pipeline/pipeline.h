@@ -232,6 +232,10 @@ typedef struct pz_result {
     pz_symmetry symmetry;
     int symmetry_used;
     int32_t pieces_with_symmetry, pieces_without_symmetry;
+    int32_t mirror_pieces;           /* mirror pairs and panels crossed by the plane in the final layout */
+    int32_t exact_mirror_pieces;     /* those made exact mirror images (docs/segment.md, "Exact mirror pieces") */
+    double *panel_mirror_residual_mm; /* pattern->panel_count: the largest outline residual of each panel's mirror
+                                         pair (or of itself, crossed by the plane), -1 none; or NULL */
     /* export */
     char *garment_name;              /* the name on the pieces (options.output.garment_name points here when the
                                         options named none: the input's base name) */

@@ -77,6 +77,7 @@ struct pl_segmenter {
     int symmetry_decided;               /* 1: the first layouts with and without the plane compared */
     int symmetry_used;                  /* 1: the layouts are made on one half and mirrored */
     int32_t pieces_with, pieces_without; /* the first layouts' panel counts (-1: not made) */
+    int32_t mirror_pieces, exact_mirror_pieces; /* of the last flattening (pl_segmenter_exact_mirrors) */
     /* Monotone panel counts (ladder_cuts): the looser settings' final cuts, seeded into this run's layout. */
     int ladder_done;                    /* 1: the layout and its verdict rounds were made by solve_setting */
     int seeded;                         /* 1: its own layout had fewer panels than a looser setting's: seeded */
@@ -437,6 +438,9 @@ static pz_status ladder_round(const pl_segmenter *seg, pz_mesh *garment, const p
         status = PZ_ERR_NOMEM;
     if (status == PZ_OK)
         status = ladder_flatten(seg, pattern, goals->goals.max_strain, uv, &quiet);
+    int32_t exact = 0, pieces = 0; /* the pieces as the run's own flattening gives them (flatten_rounds) */
+    if (status == PZ_OK && seg->symmetry_used)
+        status = pl_exact_mirror_pieces(pattern, segment, goals->goals.max_strain, uv, &exact, &pieces, &quiet);
     pz_fabric fabric = seg->options->flatten.fabric;
     if (status == PZ_OK)
         status = pz_metrics_compute(pattern, uv, 0, &fabric, &metrics, &quiet);
@@ -674,6 +678,20 @@ int pl_segmenter_accept(pl_segmenter *seg, const pz_pattern *pattern, const doub
     return accepted;
 }
 
+pz_status pl_segmenter_exact_mirrors(pl_segmenter *seg, const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+{
+    if (!seg->segment || !seg->symmetry_used)
+        return PZ_OK;
+    int32_t exact = 0, pieces = 0;
+    pz_status status = pl_exact_mirror_pieces(pattern, seg->segment, seg->goals.goals.max_strain, uv, &exact, &pieces,
+                                              ctx);
+    seg->mirror_pieces = pieces, seg->exact_mirror_pieces = exact;
+    if (status == PZ_OK && pieces > 0)
+        pz_note(ctx, "run: symmetry: %d of %d mirror pieces made exact%s", (int)exact, (int)pieces,
+                exact < pieces ? " (the others would have gone past the strain goal)" : "");
+    return status;
+}
+
 /* ---------------------------------------------------------------- the segmenter */
 
 /* The goals of a setting: the run's own (seam mismatch, iterations), with this S and C, the grain of the run. */
@@ -751,4 +769,6 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->symmetry_used = seg->symmetry_used;
     result->pieces_with_symmetry = seg->pieces_with;
     result->pieces_without_symmetry = seg->pieces_without;
+    result->mirror_pieces = seg->mirror_pieces;
+    result->exact_mirror_pieces = seg->exact_mirror_pieces;
 }
