@@ -56,7 +56,7 @@
 #define PZ_CLI_OPT_FEATURES (UINT64_C(1) << 25) /* --features FILE (flatten, wirewarp) */
 #define PZ_CLI_OPT_MAX_CORNERS (UINT64_C(1) << 26) /* --max-corners C (run) */
 #define PZ_CLI_OPT_MAX_STRAIN (UINT64_C(1) << 27) /* --max-strain S (run) */
-#define PZ_CLI_OPT_SYMMETRY (UINT64_C(1) << 28) /* --symmetry auto|off|x|y|z (run) */
+#define PZ_CLI_OPT_SYMMETRY (UINT64_C(1) << 28) /* --symmetry auto|off|x|y|z|PLANE (run) */
 #define PZ_CLI_OPT_PREPARE (UINT64_C(1) << 29) /* --prepare auto|off (run) */
 #define PZ_CLI_OPT_SEAM_ALLOWANCE (UINT64_C(1) << 30) /* --seam-allowance MM (flatten, run) */
 #define PZ_CLI_OPT_HEM_ALLOWANCE (UINT64_C(1) << 31) /* --hem-allowance MM */
@@ -70,10 +70,11 @@
 #define PZ_CLI_OPT_SIZE (UINT64_C(1) << 39) /* --size NAME: the size printed on every piece */
 #define PZ_CLI_OPT_OUTPUTS (UINT64_C(1) << 40) /* --outputs LIST: the files to write (flatten, run) */
 #define PZ_CLI_OPT_MAX_SEAM_MISMATCH (UINT64_C(1) << 41) /* --max-seam-mismatch R (run) */
+#define PZ_CLI_OPT_FOLD (UINT64_C(1) << 42) /* --fold (run; a flag: stored as the value "1") */
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 33
+#define PZ_CLI_VALUE_COUNT 34
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;
