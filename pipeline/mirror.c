@@ -652,14 +652,13 @@ typedef struct panel_graph {
     uint8_t *fixed;         /* count */
     int32_t face_count;
     int32_t *faces;         /* face_count x 3 local indices */
-    double *flat;           /* face_count x 6: each triangle's 3D shape in its own plane (x, y per corner) */
     double *cotan;          /* face_count x 3: half the cotangent opposite each edge k -> k+1 */
 } panel_graph;
 
 static void panel_graph_free(panel_graph *g)
 {
     free(g->vertices), free(g->offsets), free(g->neighbours), free(g->weights), free(g->fixed);
-    free(g->faces), free(g->flat), free(g->cotan);
+    free(g->faces), free(g->cotan);
     memset(g, 0, sizeof *g);
 }
 
@@ -695,10 +694,9 @@ static int panel_graph_build(const pz_pattern *pattern, const pz_topology *topol
     size_t faces = (size_t)g->face_count;
     g->vertices = malloc((3 * faces + 1) * sizeof(int32_t));
     g->faces = malloc((3 * faces + 1) * sizeof(int32_t));
-    g->flat = malloc((6 * faces + 1) * sizeof(double));
     g->cotan = malloc((3 * faces + 1) * sizeof(double));
     int32_t *face_ids = malloc((faces + 1) * sizeof(int32_t));
-    if (!g->vertices || !g->faces || !g->flat || !g->cotan || !face_ids) {
+    if (!g->vertices || !g->faces || !g->cotan || !face_ids) {
         free(face_ids);
         return 0;
     }
@@ -712,7 +710,8 @@ static int panel_graph_build(const pz_pattern *pattern, const pz_topology *topol
                 local[v] = g->count, g->vertices[g->count++] = v;
             g->faces[3 * t + k] = local[v];
         }
-        flat_triangle(mesh, f, g->flat + 6 * (size_t)t, g->cotan + 3 * (size_t)t);
+        double flat[6];
+        flat_triangle(mesh, f, flat, g->cotan + 3 * (size_t)t);
         ++t;
     }
     g->offsets = calloc((size_t)g->count + 2, sizeof(int32_t));

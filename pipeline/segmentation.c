@@ -36,6 +36,10 @@ typedef struct goal_setting {
     int32_t verdict_rounds;          /* segmentations redone because of them */
     pz_segment_cache *cache;         /* evaluations shared by the rounds */
     char verdict_reasons[512];       /* the last rejection's panels, for the progress note */
+    /* With a plane: whether this setting's layouts use it, decided by its first layouts with and without
+     * (choose_symmetry), as a run with these goals decides. */
+    int symmetry_decided, symmetry_used;
+    int32_t pieces_with, pieces_without;
 } goal_setting;
 
 static void goal_setting_clear(goal_setting *goals)
@@ -74,9 +78,7 @@ struct pl_segmenter {
     /* The mirror plane (docs/segment.md, "Symmetry"): detected (or the user's) once, before the field. */
     pz_symmetry symmetry;
     pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
-    int symmetry_decided;               /* 1: the first layouts with and without the plane compared */
-    int symmetry_used;                  /* 1: the layouts are made on one half and mirrored */
-    int32_t pieces_with, pieces_without; /* the first layouts' panel counts (-1: not made) */
+    int plane;                          /* 1: a plane was found or given (each goal setting decides its use) */
     int32_t mirror_pieces, exact_mirror_pieces; /* of the last flattening (pl_segmenter_exact_mirrors) */
     /* Monotone panel counts (ladder_cuts): the looser settings' final cuts, seeded into this run's layout. */
     int ladder_done;                    /* 1: the layout and its verdict rounds were made by solve_setting */
@@ -86,6 +88,14 @@ struct pl_segmenter {
     int32_t seed_panels;                /* the most panels among the parent settings */
     double ladder_ms;
 };
+
+/* The back-ends whose pieces may be made exact mirror images: WireWarping and spring-mass make every seam's two
+ * sides exactly as long, which moving an outline would undo (their mirror pieces stay as flattened). */
+static int may_make_exact(const pl_segmenter *seg)
+{
+    pz_backend backend = seg->options->flatten.backend;
+    return backend != PZ_BACKEND_WIREWARP && backend != PZ_BACKEND_SPRINGMASS;
+}
 
 static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_segment_result *segment,
                          const pz_pattern *pattern, const pz_metrics *metrics, const double *pose_strain,
@@ -216,7 +226,8 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     options.vetoed = goals->vetoed;
     options.vetoed_count = goals->vetoed_count;
     /* The plane the pipeline detected (or was given) once: the segmentation uses it as given, or none. */
-    options.symmetry = seg->symmetry_used ? PZ_SYMMETRY_PLANE : PZ_SYMMETRY_OFF;
+    int mirrored = seg->plane && goals->symmetry_used;
+    options.symmetry = mirrored ? PZ_SYMMETRY_PLANE : PZ_SYMMETRY_OFF;
     memcpy(options.symmetry_plane, seg->symmetry.normal, sizeof seg->symmetry.normal);
     options.symmetry_plane[3] = seg->symmetry.offset;
     if (!goals->cache && !(goals->cache = pz_segment_cache_create()))
@@ -229,7 +240,7 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     if (goals->verdict_rounds > 0)
         pz_note(progress, "run: segment again (round %d): the joint flattening rejected %s",
                 (int)goals->verdict_rounds + 1, goals->verdict_reasons);
-    return pz_segment(garment, topology, seg->symmetry_used ? seg->mirror_field : seg->field, &options, out, ctx);
+    return pz_segment(garment, topology, mirrored ? seg->mirror_field : seg->field, &options, out, ctx);
 }
 
 /*
@@ -245,8 +256,7 @@ static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_
     memcpy(plane, given->symmetry_plane, sizeof plane);
     plane[3] *= garment->unit_scale; /* the user's plane is in the input's units, the garment in millimetres */
     pz_status status = pz_symmetry_detect(garment, topology, given->symmetry, plane, 0, &seg->symmetry, ctx);
-    seg->pieces_with = seg->pieces_without = -1;
-    seg->symmetry_used = status == PZ_OK && seg->symmetry.found;
+    seg->plane = status == PZ_OK && seg->symmetry.found;
     if (status == PZ_OK && seg->symmetry.found)
         status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
                                    &seg->mirror_field, ctx);
@@ -269,30 +279,32 @@ static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_
 static pz_status choose_symmetry(pl_segmenter *seg, const pz_mesh *garment, const pz_topology *topology,
                                  const pz_sketch *sketch, goal_setting *goals, pz_segment_result **out, pz_ctx *ctx)
 {
-    seg->symmetry_decided = 1;
-    if (!seg->symmetry_used)
+    goals->symmetry_decided = 1;
+    goals->symmetry_used = seg->plane;
+    goals->pieces_with = goals->pieces_without = -1;
+    if (!seg->plane)
         return out ? segment_once(seg, garment, topology, sketch, goals, NULL, ctx, out, ctx) : PZ_OK;
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
     pz_segment_result *with = NULL, *without = NULL;
-    pz_status status = segment_once(seg, garment, topology, sketch, goals, NULL, ctx, &with, ctx);
-    seg->symmetry_used = 0;
+    pz_status status = segment_once(seg, garment, topology, sketch, goals, NULL, out ? ctx : &quiet, &with, ctx);
+    goals->symmetry_used = 0;
     if (status == PZ_OK)
         status = segment_once(seg, garment, topology, sketch, goals, NULL, &quiet, &without, ctx);
     if (status == PZ_OK) {
-        seg->pieces_with = with->panel_count;
-        seg->pieces_without = without->panel_count;
-        seg->symmetry_used = with->panel_count <= without->panel_count;
-        if (!seg->symmetry_used)
+        goals->pieces_with = with->panel_count;
+        goals->pieces_without = without->panel_count;
+        goals->symmetry_used = with->panel_count <= without->panel_count;
+        if (goals == &seg->goals && !goals->symmetry_used)
             pz_note(ctx, "run: symmetry: the layout made on one half and mirrored has %d panels, without the plane "
                     "%d: the plane is not used", (int)with->panel_count, (int)without->panel_count);
-        else
+        else if (goals == &seg->goals)
             pz_note(ctx, "run: symmetry: the layout made on one half and mirrored has %d panels (%d without the "
                     "plane)", (int)with->panel_count, (int)without->panel_count);
     }
     if (status == PZ_OK && out) {
-        *out = seg->symmetry_used ? with : without;
-        if (seg->symmetry_used)
+        *out = goals->symmetry_used ? with : without;
+        if (goals->symmetry_used)
             with = NULL;
         else
             without = NULL;
@@ -339,10 +351,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         seg->ladder_done = 1;
         seg->field_singularities = seg->field->singularity_count;
         pz_segment_result_free(&seg->segment);
-        if (!seg->symmetry_decided)
-            status = choose_symmetry(seg, garment, topology, sketch, &seg->goals, NULL, ctx);
-        if (status == PZ_OK)
-            status = solve_setting(seg, garment, topology, sketch, seg->goals.goals.max_strain, seg->goals.goals.max_corners,
+        status = solve_setting(seg, garment, topology, sketch, seg->goals.goals.max_strain, seg->goals.goals.max_corners,
                                &seg->goals, &seg->segment, &seg->seeded, &seg->seed_panels, ctx);
         if (status == PZ_OK)
             status = keep_or_restore_original(seg, garment, ctx);
@@ -353,7 +362,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
     } else if (status == PZ_OK) {
         seg->field_singularities = seg->field->singularity_count;
         pz_segment_result_free(&seg->segment);
-        if (!seg->symmetry_decided)
+        if (!seg->goals.symmetry_decided)
             status = choose_symmetry(seg, garment, topology, sketch, &seg->goals, &seg->segment, ctx);
         else
             status = segment_once(seg, garment, topology, sketch, &seg->goals, NULL, ctx, &seg->segment, ctx);
@@ -439,7 +448,7 @@ static pz_status ladder_round(const pl_segmenter *seg, pz_mesh *garment, const p
     if (status == PZ_OK)
         status = ladder_flatten(seg, pattern, goals->goals.max_strain, uv, &quiet);
     int32_t exact = 0, pieces = 0; /* the pieces as the run's own flattening gives them (flatten_rounds) */
-    if (status == PZ_OK && seg->symmetry_used)
+    if (status == PZ_OK && seg->plane && goals->symmetry_used && may_make_exact(seg))
         status = pl_exact_mirror_pieces(pattern, segment, goals->goals.max_strain, uv, &exact, &pieces, &quiet);
     pz_fabric fabric = seg->options->flatten.fabric;
     if (status == PZ_OK)
@@ -469,6 +478,8 @@ static pz_status verdict_rounds(pl_segmenter *seg, pz_mesh *garment, const pz_to
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
     pz_status status = PZ_OK;
+    if (!goals->symmetry_decided) /* as the run with these goals decides it, before its verdict rounds */
+        status = choose_symmetry(seg, garment, topology, sketch, goals, NULL, ctx);
     for (int accepted = 0; status == PZ_OK && !accepted;) {
         pz_segment_result_free(out);
         status = keep_or_restore_original(seg, garment, ctx);
@@ -504,9 +515,12 @@ static pz_status solve_setting(pl_segmenter *seg, pz_mesh *garment, const pz_top
     if (status == PZ_OK)
         status = verdict_rounds(seg, garment, topology, sketch, goals, NULL, out, ctx);
     if (status == PZ_OK && seeds && (*out)->panel_count < *most_panels) {
+        goal_setting kept = *goals; /* the symmetry decision stands: it was this setting's own */
         goal_setting_clear(goals);
         memset(goals, 0, sizeof *goals);
         set_goals(seg, goals, max_strain, max_corners);
+        goals->symmetry_decided = kept.symmetry_decided, goals->symmetry_used = kept.symmetry_used;
+        goals->pieces_with = kept.pieces_with, goals->pieces_without = kept.pieces_without;
         *seeded = 1;
         status = verdict_rounds(seg, garment, topology, sketch, goals, seeds, out, ctx);
     }
@@ -680,7 +694,7 @@ int pl_segmenter_accept(pl_segmenter *seg, const pz_pattern *pattern, const doub
 
 pz_status pl_segmenter_exact_mirrors(pl_segmenter *seg, const pz_pattern *pattern, double *uv, pz_ctx *ctx)
 {
-    if (!seg->segment || !seg->symmetry_used)
+    if (!seg->segment || !seg->plane || !seg->goals.symmetry_used || !may_make_exact(seg))
         return PZ_OK;
     int32_t exact = 0, pieces = 0;
     pz_status status = pl_exact_mirror_pieces(pattern, seg->segment, seg->goals.goals.max_strain, uv, &exact, &pieces,
@@ -766,9 +780,9 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->timings.looser_goals = seg->ladder_ms;
     result->symmetry = seg->symmetry; /* the plane's figures; its maps stay with the segmenter */
     result->symmetry.vertex_mirror = NULL, result->symmetry.vertex_side = NULL, result->symmetry.face_mirror = NULL;
-    result->symmetry_used = seg->symmetry_used;
-    result->pieces_with_symmetry = seg->pieces_with;
-    result->pieces_without_symmetry = seg->pieces_without;
+    result->symmetry_used = seg->plane && seg->goals.symmetry_used;
+    result->pieces_with_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_with : -1;
+    result->pieces_without_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_without : -1;
     result->mirror_pieces = seg->mirror_pieces;
     result->exact_mirror_pieces = seg->exact_mirror_pieces;
 }

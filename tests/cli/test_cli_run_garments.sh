@@ -6,7 +6,11 @@
 # on the DiffAvatar T-shirt goes through the whole run with its 4 true panels,
 # each close to its true shape (tests/cli/true_pieces.py prints them).
 # Prints one table line per garment (faces, panels, darts, worst strain, worst
-# seam mismatch, seconds) for the record.
+# seam mismatch, seconds) for the record. Symmetry (docs/segment.md): the
+# T-shirt with its plane forced (x) has no more panels than without symmetry;
+# where a run uses its plane (the wetsuit, the leggings, the dress), every
+# mirror piece it made exact is exact within 0.1 mm, and the wetsuit (exactly
+# symmetric) gets some.
 #
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -40,8 +44,24 @@ PY
         "not injective" "d['summary']['injective'] is True" \
         "a panel has more than 8 corners" "all(p['corners'] <= 8 for p in d['panels'])" \
         "a triangle's strain exceeds 0.05" "d['summary']['max_abs_strain'] <= 0.05 + 1e-9" \
-        "a seam's sides differ by more than 0.5%" "d['summary']['max_seam_mismatch_rel'] <= 0.005"
+        "a seam's sides differ by more than 0.5%" "d['summary']['max_seam_mismatch_rel'] <= 0.005" \
+        "a mirror piece made exact is not (0.1 mm)" \
+        "sum(1 for p in d['panels'] if 0 <= p['mirror_residual_mm'] < 0.1) >= d['segmentation']['symmetry']['exact_mirror_pieces']"
 done
+report_checks "run parafashion-wetsuit.obj mirrored" run-parafashion-wetsuit \
+    "the plane not used" "d['segmentation']['symmetry']['used']" \
+    "no mirror piece made exact" "d['segmentation']['symmetry']['exact_mirror_pieces'] >= 2"
+
+# Forcing a plane never multiplies the pieces (issue 14: x forced on the T-shirt once gave 6 -> 74 pieces).
+run run "$DATA/garments/diffavatar-tshirt.obj" -o tshirt-x --symmetry x --outputs json --quiet
+expect_ok "run diffavatar-tshirt --symmetry x"
+run run "$DATA/garments/diffavatar-tshirt.obj" -o tshirt-off --symmetry off --outputs json --quiet
+expect_ok "run diffavatar-tshirt --symmetry off"
+check "run diffavatar-tshirt --symmetry x: more panels than without symmetry" python3 -c '
+import json, sys
+forced, off = (json.load(open(f + "/report.json"))["summary"]["panel_count"] for f in sys.argv[1:3])
+print("T-shirt: --symmetry x %d panels, off %d" % (forced, off))
+sys.exit(0 if forced <= off else 1)' tshirt-x tshirt-off
 
 run run "$DATA/garments/diffavatar-tshirt.obj" --panels uv -o tshirt-uv --quiet
 expect_ok "run --panels uv diffavatar-tshirt"
