@@ -12,6 +12,7 @@
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
  *   mirror.c       exact mirror pieces: pairs and pieces crossed by the plane
+ *   mirror_pairing.c  their outlines paired (mirror_internal.h), the residual
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
  *   report.c       report.json (pz_result_report)
  *   write.c        pz_result_write: every file, all or nothing
