@@ -294,10 +294,13 @@ typedef struct pz_segment_result {
  * cross-field (field->directions). The run always ends: when the goals cannot
  * be met (S = 0 on a sphere, a budget exhausted), the best layout found is
  * returned with goals_met = 0 and the reasons, still PZ_OK. A closed surface
- * gets loops; several components are segmented each on its own. With
- * PZ_SYMMETRY_AUTO a detected plane whose residual exceeds 0.25 mean edges
- * is not used (result->symmetry.found = 0, its residual kept): mirrored
- * paths would land off the mirrored geometry (docs/segment.md).
+ * gets loops; several components are segmented each on its own. With a
+ * plane (found by PZ_SYMMETRY_AUTO within its tolerance, or given) the
+ * layout is made on one half and mirrored (docs/segment.md, "Symmetry"):
+ * the plane cut first and removed last, candidates traced on half 0, mirror
+ * pairs judged as one piece (pz_segment_panel.copy). pz_segment uses the
+ * plane whenever it has one; panelize run also makes the layout without it
+ * and keeps the one with fewer panels.
  * Progress goes to ctx->progress (stage "segment", a fraction of the call
  * that never decreases) as well as to options->on_progress; ctx->cancel is
  * checked between steps (each insertion, removal, dart, panel evaluation),
