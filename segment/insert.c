@@ -487,8 +487,9 @@ pz_status seg_insert_all(seg_layout *layout, pz_segment_result *result, pz_ctx *
     options.interior_sources = layout->max_candidates / 2;
     options.threads = layout->threads;
     pz_trace_paths *traced = NULL;
-    /* With a mirror plane the candidates come from one half (segment/mirror.c), mirrored when inserted. */
-    pz_status status = layout->face_half ? seg_trace_half(layout, layout->max_candidates / 2, &traced, ctx)
+    /* With a mirror plane the candidates come from one half (segment/mirror.c), mirrored when inserted: half the
+     * sources on half the surface, the whole garment's density (twice as many made twice the panels to remove). */
+    pz_status status = layout->face_half ? seg_trace_half(layout, layout->max_candidates / 4, &traced, ctx)
                                          : pz_trace_candidates(layout->graph, layout->mesh, layout->topology, &options,
                                                                &traced, ctx);
     seg_candidate *candidates = NULL;
