@@ -56,6 +56,8 @@
 #define COARSE_SAMPLES 500
 #define FINE_ITERATIONS 15         /* at most, for the best REFINED candidates */
 #define REFINED 3
+#define SETTLED_OFFSET 1e-9       /* an axis's plane settled: its offset moved less x diag */
+#define AXIS_ITERATIONS 60
 #define SETTLED_RAD 1e-4           /* the plane settled: its normal turned less, its offset moved less x diag */
 #define SIMILAR_MOMENTS 1.15       /* principal moments this close: their axes are sampled in their plane */
 #define SAMPLED_STEP_DEG 15.0
@@ -397,12 +399,18 @@ static double fit_refit(fit *f, plane *pl, int fixed_normal)
     return moved;
 }
 
-/* Up to `iterations` match-and-refit steps (fewer once the plane settles); returns the final residual. */
+/*
+ * Up to `iterations` match-and-refit steps (fewer once the plane settles); returns the final residual. An
+ * axis's plane (fixed_normal) settles to SETTLED_OFFSET: the same fixed point whether it starts from the
+ * centroid (--symmetry x) or from a free fit snapped to the axis (AUTO), so both give the same plane and
+ * the same layout.
+ */
 static double fit_plane(fit *f, plane *pl, int fixed_normal, int iterations)
 {
-    for (int i = 0; i < iterations; ++i) {
+    double settled = fixed_normal ? SETTLED_OFFSET : SETTLED_RAD;
+    for (int i = 0; i < (fixed_normal ? AXIS_ITERATIONS : iterations); ++i) {
         fit_match(f, pl);
-        if (fit_refit(f, pl, fixed_normal) < SETTLED_RAD)
+        if (fit_refit(f, pl, fixed_normal) < settled)
             break;
     }
     return fit_match(f, pl);
