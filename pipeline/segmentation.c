@@ -284,13 +284,33 @@ static pz_status choose_symmetry(pl_segmenter *seg, const pz_mesh *garment, cons
     goals->pieces_with = goals->pieces_without = -1;
     if (!seg->plane)
         return out ? segment_once(seg, garment, topology, sketch, goals, NULL, ctx, out, ctx) : PZ_OK;
-    pz_ctx quiet;
+    /* The two layouts are independent: made side by side (two threads; each one's own evaluations then run on
+     * one thread), the layout without the plane with its own cache, kept when its layout is. */
+    goal_setting plain = *goals;
+    plain.symmetry_used = 0;
+    plain.cache = pz_segment_cache_create();
+    if (!goals->cache && !(goals->cache = pz_segment_cache_create())) {
+        pz_segment_cache_free(&plain.cache);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    }
+    if (!plain.cache)
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    pz_ctx quiet, quiet_plain;
     pz_ctx_quiet(ctx, &quiet);
+    pz_ctx_quiet(ctx, &quiet_plain);
     pz_segment_result *with = NULL, *without = NULL;
-    pz_status status = segment_once(seg, garment, topology, sketch, goals, NULL, out ? ctx : &quiet, &with, ctx);
-    goals->symmetry_used = 0;
+    pz_status status = PZ_OK, plain_status = PZ_OK;
+#pragma omp parallel sections num_threads(2)
+    {
+#pragma omp section
+        status = segment_once(seg, garment, topology, sketch, goals, NULL, out ? ctx : &quiet, &with, &quiet);
+#pragma omp section
+        plain_status = segment_once(seg, garment, topology, sketch, &plain, NULL, &quiet_plain, &without, &quiet_plain);
+    }
     if (status == PZ_OK)
-        status = segment_once(seg, garment, topology, sketch, goals, NULL, &quiet, &without, ctx);
+        status = plain_status;
+    if (status != PZ_OK) /* the first failure's message, as one call would have left it */
+        pz_error(ctx, status, "%s", plain_status != PZ_OK && quiet.error[0] == '\0' ? quiet_plain.error : quiet.error);
     if (status == PZ_OK) {
         goals->pieces_with = with->panel_count;
         goals->pieces_without = without->panel_count;
@@ -302,6 +322,11 @@ static pz_status choose_symmetry(pl_segmenter *seg, const pz_mesh *garment, cons
             pz_note(ctx, "run: symmetry: the layout made on one half and mirrored has %d panels (%d without the "
                     "plane)", (int)with->panel_count, (int)without->panel_count);
     }
+    if (status == PZ_OK && !goals->symmetry_used) { /* the evaluations of the layout kept go on with it */
+        pz_segment_cache *swap = goals->cache;
+        goals->cache = plain.cache, plain.cache = swap;
+    }
+    pz_segment_cache_free(&plain.cache);
     if (status == PZ_OK && out) {
         *out = goals->symmetry_used ? with : without;
         if (goals->symmetry_used)
