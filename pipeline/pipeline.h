@@ -124,7 +124,9 @@ typedef struct pz_run_options {
     pz_field_options field;          /* sketch and poses are set by the run */
     /* segment */
     pz_goal_options goals;           /* S, C, seam mismatch: pz_goal_options_default (its grain is set by the run) */
-    pz_segment_options segment;      /* symmetry, darts, candidates, threads (its goals come from `goals`) */
+    pz_segment_options segment;      /* symmetry, darts, candidates, threads (its goals come from `goals`);
+                                        segment.symmetry_plane (PZ_SYMMETRY_PLANE) in the input's units, like a
+                                        sketch file: pz_run scales its offset with the mesh */
     const char *sketch_path;         /* seams the user drew: {"curves": [[[x,y,z], ...]]} in the mesh's units */
     const pz_sketch *sketch;         /* or the same in memory (millimetres); both may be given */
     int truing;                      /* 1 (default): seams traced along mesh edges are smoothed on the surface */

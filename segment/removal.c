@@ -9,8 +9,12 @@
  * Removal: in reverse insertion order (a segment's order is the latest
  * inserted path among its edges), sketched segments never, the segments on
  * the symmetry plane last (Sec. 4.2, "Symmetry"), each segment is uncut
- * together with its mirror image; the removal is kept when every panel it
- * touches still meets the goals. Neither a removal nor a dart is tried next
+ * together with its mirror image (the stretch of its mirror segment between
+ * the images of its vertices: mirror_edges; a segment of half 1 that is the
+ * image of one of half 0 is not tried on its own, and a stub of a few edges
+ * the two sides' different junctions leave goes with it); the removal is
+ * kept when every panel it touches still meets the goals (a mirror pair
+ * judged as one piece: seg_panel_failures). Neither a removal nor a dart is tried next
  * to a panel that already fails on strain or injectivity (re-gluing only
  * adds faces to it). A removal that would leave a cut ending
  * inside a panel (a T-junction stub) is skipped: such partial seams are the

@@ -60,9 +60,10 @@ typedef struct pz_symmetry {
     int axis;                  /* 0, 1, 2: the normal is that coordinate axis; -1 an oblique plane, or none */
     double normal[3], offset;  /* plane: dot(normal, p) = offset (normal unit) */
     /* How far the garment is from its mirror image: every vertex in use mirrored through the plane,
-     * its distance to the surface (the closest point on the faces around its nearest vertex). */
-    double residual_mm;        /* the 90th percentile of those distances (robust: a draped garment is
-                                  only nearly symmetric, and its meshing is not symmetric at all) */
+     * its distance to the surface (the closest point on the faces around its nearest vertex), and each
+     * border vertex's distance to the border. */
+    double residual_mm;        /* the larger 90th percentile of the two (robust: a draped garment is only
+                                  nearly symmetric, and its meshing is not symmetric at all) */
     double residual_rel;       /* residual_mm / bounding-box diagonal: AUTO's acceptance figure */
     double rms_mm;             /* their RMS */
     int32_t vertex_count;
@@ -80,8 +81,8 @@ typedef struct pz_symmetry {
  * plane of two nearly equal principal axes), each plane through the area
  * centroid refined by an ICP-like fit (mirror, match the closest surface
  * points, refit the plane to the nearest 80 % of the pairs); the plane of
- * smallest residual (residual_mm: the 90th percentile of point-to-surface
- * distances) wins, snapped to a coordinate axis within 1 degree when that
+ * smallest residual (residual_mm: 90th percentiles of the mirrored vertices'
+ * distances to the surface and of the border's to the border) wins, snapped to a coordinate axis within 1 degree when that
  * fits as well, and is used (found = 1) when residual_rel is below
  * tolerance_rel (0 = 0.015); otherwise found = 0 with the best residual kept.
  * PZ_SYMMETRY_X/Y/Z: the plane normal to that axis, its offset fitted, used
