@@ -57,7 +57,7 @@ static int measure(const char *name, const pz_mesh *mesh)
     }
     if (!status) {
         double start = pz_seconds();
-        status = pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, 0.0, &symmetry, &ctx);
+        status = pz_symmetry_detect(mesh, topology, PZ_SYMMETRY_AUTO, NULL, 0.0, &symmetry, &ctx);
         symmetry_ms = 1e3 * (pz_seconds() - start);
     }
     if (status) {

@@ -56,7 +56,7 @@
 #define PZ_CLI_OPT_FEATURES (UINT64_C(1) << 25) /* --features FILE (flatten, wirewarp) */
 #define PZ_CLI_OPT_MAX_CORNERS (UINT64_C(1) << 26) /* --max-corners C (run) */
 #define PZ_CLI_OPT_MAX_STRAIN (UINT64_C(1) << 27) /* --max-strain S (run) */
-#define PZ_CLI_OPT_SYMMETRY (UINT64_C(1) << 28) /* --symmetry auto|off|x|y|z (run) */
+#define PZ_CLI_OPT_SYMMETRY (UINT64_C(1) << 28) /* --symmetry auto|off|x|y|z|PLANE (run) */
 #define PZ_CLI_OPT_PREPARE (UINT64_C(1) << 29) /* --prepare auto|off (run) */
 #define PZ_CLI_OPT_SEAM_ALLOWANCE (UINT64_C(1) << 30) /* --seam-allowance MM (flatten, run) */
 #define PZ_CLI_OPT_HEM_ALLOWANCE (UINT64_C(1) << 31) /* --hem-allowance MM */
@@ -74,6 +74,7 @@
 #define PZ_CLI_OPT_MIN_PIECE_AREA (UINT64_C(1) << 43) /* --min-piece-area R (run) */
 #define PZ_CLI_OPT_MIN_DART_INTAKE (UINT64_C(1) << 44) /* --min-dart-intake MM (run) */
 #define PZ_CLI_OPT_STRICT (UINT64_C(1) << 45) /* --strict (run; a flag: stored as the value "1") */
+#define PZ_CLI_OPT_FOLD (UINT64_C(1) << 46) /* --fold (run; a flag: stored as the value "1") */
 
 /* A command's outcome besides the pz_status codes (main.c maps it to its exit code, docs/cli.md): `run
  * --strict` wrote its files but the pattern misses its goals. */
@@ -82,7 +83,7 @@
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 37
+#define PZ_CLI_VALUE_COUNT 38
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;

@@ -21,7 +21,8 @@
 const char pz_cli_run_usage[] =
     "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S]\n"
     "           [--pose FILE]... [--sketch FILE] [--panels FILE|uv]\n"
-    "           [--symmetry auto|off|x|y|z] [--darts on|off] [--truing on|off] [--grain X,Y,Z]\n"
+    "           [--symmetry auto|off|x|y|z|PLANE] [--fold] [--darts on|off] [--truing on|off]\n"
+    "           [--grain X,Y,Z]\n"
     "           [--prepare auto|off] [--backend textile|lscm|wirewarp|springmass]\n"
     "           [--iterations N] [--weights S,R,D,M] [--fabric KSU,KSV,KR]\n"
     "           [--seam-allowance MM] [--hem-allowance MM] [--allowances FILE]\n"
@@ -49,7 +50,15 @@ const char pz_cli_run_usage[] =
     "                       unless it is a whole part of the garment\n"
     "  --min-dart-intake MM a dart takes in at least MM at its mouth (default 6)\n"
     "  --strict             exit 3 when the pattern misses a goal (files written)\n"
-    "  --symmetry M         auto (default: detect a mirror plane), off, x, y or z\n"
+    "  --symmetry M         auto (default: find a mirror plane in any orientation),\n"
+    "                       off, x, y or z (that axis's plane, its offset fitted),\n"
+    "                       or a plane: NX,NY,NZ,D (the plane n . p = D) or\n"
+    "                       PX,PY,PZ,NX,NY,NZ (a point on it and its normal), in\n"
+    "                       the garment's units. The layout is made on one half\n"
+    "                       and mirrored, unless that gives more panels than the\n"
+    "                       layout without the plane (then it is not used)\n"
+    "  --fold               draw a piece that is its own mirror image as its half,\n"
+    "                       to be cut on the fold (the fold line marked)\n"
     "  --darts on|off       insert darts where a seam can be partly closed (default on)\n"
     "  --truing on|off      smooth the seams traced along mesh edges into clean lines\n"
     "                       by moving their vertices along the surface (default on;\n"
@@ -107,6 +116,52 @@ static pz_status parse_bounded(const pz_cli_args *args, uint64_t flag, const cha
     return PZ_OK;
 }
 
+/*
+ * --symmetry: a word (auto, off, x, y, z) or a plane given by numbers, 4
+ * (nx,ny,nz,d: the plane n . p = d) or 6 (px,py,pz,nx,ny,nz: a point on it
+ * and its normal), in the garment's units (the pipeline scales d with the
+ * mesh).
+ */
+static pz_status parse_symmetry(const char *text, pz_segment_options *segment, pz_ctx *ctx)
+{
+    static const char *const names[] = {"auto", "off", "x", "y", "z"};
+    static const pz_symmetry_mode modes[] = {PZ_SYMMETRY_AUTO, PZ_SYMMETRY_OFF, PZ_SYMMETRY_X, PZ_SYMMETRY_Y,
+                                             PZ_SYMMETRY_Z};
+    int index = 0;
+    if (!(text[0] == '-' || text[0] == '+' || text[0] == '.' || (text[0] >= '0' && text[0] <= '9'))) {
+        pz_status status = parse_word("--symmetry", text, names, 5, &index, ctx);
+        if (status == PZ_OK)
+            segment->symmetry = modes[index];
+        return status;
+    }
+    double values[6];
+    int count = 0;
+    const char *at = text;
+    while (count < 6) {
+        char *end = NULL;
+        errno = 0;
+        values[count] = strtod(at, &end);
+        if (end == at || errno == ERANGE || !isfinite(values[count]))
+            break;
+        ++count;
+        at = end;
+        if (*at != ',')
+            break;
+        ++at;
+    }
+    double n[3] = {count == 6 ? values[3] : values[0], count == 6 ? values[4] : values[1],
+                   count == 6 ? values[5] : values[2]};
+    double length = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (*at || (count != 4 && count != 6) || !(length > 0))
+        return pz_error(ctx, PZ_ERR_USAGE,
+                        "run: --symmetry: '%s' is not auto, off, x, y, z, a plane NX,NY,NZ,D or a point and a normal "
+                        "PX,PY,PZ,NX,NY,NZ (the normal not zero)", text);
+    segment->symmetry = PZ_SYMMETRY_PLANE;
+    memcpy(segment->symmetry_plane, n, sizeof n);
+    segment->symmetry_plane[3] = count == 4 ? values[3] : n[0] * values[0] + n[1] * values[1] + n[2] * values[2];
+    return PZ_OK;
+}
+
 /* The goals: --max-corners, --max-strain, --max-seam-mismatch, and the piece shapes: --min-piece-width,
  * --min-piece-area, --min-dart-intake (0 turns one off). */
 static pz_status parse_goals(const pz_cli_args *args, pz_goal_options *goals, pz_ctx *ctx)
@@ -152,14 +207,9 @@ static pz_status parse_run_options(const pz_cli_args *args, pz_run_options *opti
 {
     pz_status status = parse_goals(args, &options->goals, ctx);
     const char *text;
-    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SYMMETRY))) {
-        static const char *const names[] = {"auto", "off", "x", "y", "z"};
-        static const pz_symmetry_mode modes[] = {PZ_SYMMETRY_AUTO, PZ_SYMMETRY_OFF, PZ_SYMMETRY_X, PZ_SYMMETRY_Y,
-                                                 PZ_SYMMETRY_Z};
-        int index = 0;
-        if ((status = parse_word("--symmetry", text, names, 5, &index, ctx)) == PZ_OK)
-            options->segment.symmetry = modes[index];
-    }
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SYMMETRY)))
+        status = parse_symmetry(text, &options->segment, ctx);
+    options->output.fold = pz_cli_value(args, PZ_CLI_OPT_FOLD) != NULL;
     if (status == PZ_OK && args->dart_path_count > 1)
         return pz_error(ctx, PZ_ERR_USAGE, "run: --darts given twice");
     if (status == PZ_OK && args->dart_path_count == 1)

@@ -6,7 +6,7 @@
  * Layout of the file:
  *   HEADER    $ACADVER AC1009, $INSBASE, $EXTMIN/$EXTMAX (the sheet),
  *             $INSUNITS 4 (mm), $MEASUREMENT 1 (metric)
- *   TABLES    LTYPE (CONTINUOUS), LAYER 0 1 4 7 8 14, STYLE (STANDARD);
+ *   TABLES    LTYPE (CONTINUOUS), LAYER 0 1 4 6 7 8 14, STYLE (STANDARD);
  *             left out with dxf_strict (some cutters reject anything else)
  *   BLOCKS    one block per drawn piece, in the piece's own coordinates (mm):
  *               layer 1   cut line (closed POLYLINE) and the piece text:
@@ -15,8 +15,11 @@
  *               layer 4   notches: LINEs from the cut line inward, as long
  *                         as the notch is deep (one per place: the ends of
  *                         two seams at a corner are one notch)
+ *               layer 6   mirror line: the fold of a piece cut on the fold
+ *                         (--fold; its text adds "Place on fold")
  *               layer 7   grain line (a LINE along the warp, tail to head)
- *               layer 8   internal lines: dart legs, fold lines, tip marks
+ *               layer 8   internal lines: dart legs, fold lines, tip marks,
+ *                         the "place on fold" bracket
  *   ENTITIES  one INSERT per block at its place on the sheet (the layout of
  *             pattern.svg), plus the style text on layer 1: "Style Name:",
  *             "Sample Size:", "Units: METRIC".
@@ -175,7 +178,7 @@ static void table_begin(const dxf *d, const char *name, int entries)
 static void tables(const dxf *d)
 {
     static const struct { const char *name; int colour; } layers[] = {
-        {"0", 7}, {"1", 7}, {"4", 1}, {"7", 3}, {"8", 5}, {"14", 8},
+        {"0", 7}, {"1", 7}, {"4", 1}, {"6", 6}, {"7", 3}, {"8", 5}, {"14", 8},
     };
     group(d, 0, "SECTION");
     group(d, 2, "TABLES");
@@ -300,6 +303,8 @@ static void piece_block(const dxf *d, const pz_pieces *pieces, int32_t p, const 
     }
     free(labels);
     line(d, "7", piece->grain[0], piece->grain[1]);
+    if (piece->on_fold) /* AAMA layer 6: the mirror line, the fold a piece is cut on */
+        line(d, "6", piece->fold[0], piece->fold[1]);
     for (int32_t i = 0; i < piece->line_count; ++i)
         polyline(d, "8", piece->lines[i].points, piece->lines[i].point_count, 0);
     double x = piece->grain[0][0] + TEXT_MM, y = 0.5 * (piece->grain[0][1] + piece->grain[1][1]) + 2 * TEXT_MM;
@@ -309,6 +314,8 @@ static void piece_block(const dxf *d, const pz_pieces *pieces, int32_t p, const 
     text(d, "1", x, y - 1.5 * TEXT_MM, TEXT_MM, line_text);
     snprintf(line_text, sizeof line_text, "Size: %s", pieces->size_name);
     text(d, "1", x, y - 3 * TEXT_MM, TEXT_MM, line_text);
+    if (piece->on_fold)
+        text(d, "1", x, y - 4.5 * TEXT_MM, TEXT_MM, "Place on fold");
     group(d, 0, "ENDBLK");
     group(d, 8, "0");
 }

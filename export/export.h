@@ -72,6 +72,8 @@ typedef struct pz_piece {
     int32_t line_count;
     pz_piece_line *lines;        /* dart legs and fold lines */
     double grain[2][2];          /* grainline arrow: tail, head (along +v) */
+    int on_fold;                 /* 1: drawn as its half, to be cut on the fold (pz_export_options.fold) */
+    double fold[2][2];           /* on_fold: the fold line's ends (the edge of the half without allowance) */
     double bbox_min[2], bbox_max[2]; /* of the cut line */
     double area_mm2;             /* area inside the cut line */
     double sew_area_mm2;         /* area inside the sew line */
@@ -98,9 +100,14 @@ typedef struct pz_export_options {
     double gap_mm;               /* marker gap between pieces; default 5 */
     const char *garment_name;    /* default: the input's base name */
     const char *size_name;       /* default "base" */
+    int fold;                    /* 1: a piece that is its own mirror image (panel_mirror[p] == p, symmetric within
+                                    0.25 mm) is drawn as its half, cut on the fold (docs/export.md); default 0 */
 } pz_export_options;
 
 void pz_export_options_default(pz_export_options *options);
+
+/** The cut instruction printed on a piece: "Cut 2 mirrored", "Cut 1 on fold" or "Cut 1" (static text). */
+const char *pz_piece_cut_text(const pz_piece *piece);
 
 /**
  * Reads a per-seam allowance file (--allowances FILE, format in

@@ -15,6 +15,13 @@
 
 #include <stdint.h>
 
+/* ------------------------------------------------------------------ pieces cut on the fold (fold.c) */
+
+/* Every piece that is its own mirror image (panel_mirror[panel] == panel) and symmetric about an axis within
+ * 0.25 mm becomes its half with the fold marked (docs/export.md, "Cut on the fold"); the others stay. Call after
+ * the notches, before the areas and boxes. PZ_ERR_NOMEM. */
+pz_status pz_pieces_fold(pz_pieces *pieces, const int32_t *panel_mirror, pz_ctx *ctx);
+
 /* ------------------------------------------------------------------ marker: shapes and units */
 
 /* Rows of a shape whose longest run a fabric row must hold before any column is tried there. */

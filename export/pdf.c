@@ -210,7 +210,7 @@ static void draw_piece_texts(cairo_t *cr, const pz_pieces *pieces, const pz_piec
         }
     char lines[5][96];
     snprintf(lines[0], sizeof lines[0], "%s", piece->name);
-    snprintf(lines[1], sizeof lines[1], "%s", piece->cut_quantity >= 2 ? "Cut 2 mirrored" : "Cut 1");
+    snprintf(lines[1], sizeof lines[1], "%s", pz_piece_cut_text(piece));
     snprintf(lines[2], sizeof lines[2], "%s", pieces->garment_name);
     snprintf(lines[3], sizeof lines[3], "size %s", pieces->size_name);
     snprintf(lines[4], sizeof lines[4], "%.0f x %.0f mm", piece->bbox_max[0] - piece->bbox_min[0],

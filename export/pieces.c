@@ -29,6 +29,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "export/export.h"
+#include "export/internal.h"
 
 #include "export/notches.h"
 #include "export/offset.h"
@@ -477,6 +478,8 @@ pz_status pz_pieces_build(const pz_pattern *pattern, const double *uv, const pz_
         find_mirrored_pairs(pieces, panel_mirror);
         status = pz_pieces_add_notches(pieces, pattern, uv, &map, mouths, panel_mirror, options, ctx);
     }
+    if (status == PZ_OK && options->fold)
+        status = pz_pieces_fold(pieces, panel_mirror, ctx);
     if (status == PZ_OK)
         for (int32_t p = 0; p < pieces->piece_count; ++p)
             finish_piece(&pieces->pieces[p]);

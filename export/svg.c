@@ -111,7 +111,7 @@ static void write_labels(const sheet *s, const pz_piece *piece, const pz_pieces 
     char line[160];
     text(s, "name", at, size, piece->name);
     at[1] -= 1.4 * size;
-    text(s, "cut-count", at, 0.8 * size, piece->cut_quantity == 2 ? "Cut 2 mirrored" : "Cut 1");
+    text(s, "cut-count", at, 0.8 * size, pz_piece_cut_text(piece));
     at[1] -= 1.2 * size;
     text(s, "garment", at, 0.8 * size, pieces->garment_name);
     at[1] -= 1.2 * size;

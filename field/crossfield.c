@@ -572,7 +572,11 @@ pz_status pz_field_compute(const pz_mesh *mesh, const pz_topology *topology, con
                            pz_field **out, pz_ctx *ctx)
 {
     *out = NULL;
-    pz_field_options opts = options ? *options : (pz_field_options){0, 0.0, NULL, 0};
+    pz_field_options opts;
+    if (options)
+        opts = *options;
+    else
+        pz_field_options_default(&opts);
     if (opts.smoothness == 0.0)
         opts.smoothness = PZ_FIELD_DEFAULT_SMOOTHNESS;
     if (!(opts.smoothness > 0.0) || !isfinite(opts.smoothness))
@@ -645,4 +649,87 @@ done:
 void pz_field_options_default(pz_field_options *options)
 {
     memset(options, 0, sizeof *options);
+}
+
+/* ---------------------------------------------------------------- symmetry */
+
+/*
+ * Each free face's cross (u, its 4th power in the face's frame, from its arm)
+ * averaged with the cross of its mirror face reflected through the plane and
+ * turned into the face's frame (the reflection of an arm is an arm of the
+ * reflected cross, so one arm is enough). Constrained faces keep their
+ * crosses: the border is its own mirror image already, a sketch is the
+ * user's. Every face is averaged from the input crosses, so the result does
+ * not depend on the face order, and a face and its mirror face get mirror
+ * images of each other when each is the other's mirror face.
+ */
+static void mirror_average(const field_frames *fr, const pz_field *in, const int32_t *mirror_faces,
+                           const double normal[3], double *u_re, double *u_im)
+{
+    int32_t n = in->face_count;
+    for (int32_t f = 0; f < n; ++f) {
+        double angle = 4 * frame_angle(fr, f, in->directions + 3 * (size_t)f);
+        u_re[f] = cos(angle), u_im[f] = sin(angle);
+    }
+    for (int32_t f = 0; f < n; ++f) {
+        int32_t g = mirror_faces[f];
+        if (g < 0 || g >= n || g == f || in->constraint[f] != PZ_FIELD_FREE)
+            continue;
+        const double *arm = in->directions + 3 * (size_t)g;
+        double reflected[3], t = pz_vec3_dot(arm, normal);
+        for (int k = 0; k < 3; ++k)
+            reflected[k] = arm[k] - 2 * t * normal[k];
+        double own = 4 * frame_angle(fr, f, in->directions + 3 * (size_t)f), image = 4 * frame_angle(fr, f, reflected);
+        double re = cos(own) + cos(image), im = sin(own) + sin(image);
+        if (hypot(re, im) > 1e-9) /* opposite crosses (45 degrees apart) average to nothing: keep the face's own */
+            u_re[f] = re, u_im[f] = im;
+    }
+}
+
+static int field_copy_arrays(const pz_field *from, pz_field *to)
+{
+    size_t n = (size_t)from->face_count;
+    if (!to)
+        return 0;
+    memcpy(to->normals, from->normals, 3 * n * sizeof(double));
+    memcpy(to->curvature_directions, from->curvature_directions, 3 * n * sizeof(double));
+    memcpy(to->anisotropy, from->anisotropy, n * sizeof(double));
+    memcpy(to->constraint, from->constraint, n);
+    memcpy(to->constraint_directions, from->constraint_directions, 3 * n * sizeof(double));
+    to->boundary_face_count = from->boundary_face_count, to->sketch_face_count = from->sketch_face_count;
+    to->mean_edge_length = from->mean_edge_length;
+    to->curvature_ms = from->curvature_ms, to->sketch_ms = from->sketch_ms, to->solve_ms = from->solve_ms;
+    return 1;
+}
+
+pz_status pz_field_mirrored(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field,
+                            const int32_t *mirror_faces, const double normal[3], pz_field **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    if (!field || field->face_count != mesh->face_count || !mirror_faces)
+        return pz_error(ctx, PZ_ERR_USAGE, "field: no field of this mesh or no mirror faces to symmetrize with");
+    int32_t n = mesh->face_count;
+    pz_field *mirrored = field_allocate(n);
+    field_frames fr = {NULL, NULL, NULL, NULL, 0.0};
+    double *u_re = malloc(((size_t)n + 1) * sizeof(double)), *u_im = malloc(((size_t)n + 1) * sizeof(double));
+    pz_status status = PZ_OK;
+    double start = pz_seconds();
+    if (!field_copy_arrays(field, mirrored) || !frames_build(mesh, &fr) || !u_re || !u_im)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "field: out of memory for %d faces", (int)n);
+    if (!status) {
+        mirror_average(&fr, field, mirror_faces, normal, u_re, u_im);
+        for (int32_t f = 0; f < n; ++f)
+            frame_direction(&fr, f, 0.25 * atan2(u_im[f], u_re[f]), mirrored->directions + 3 * (size_t)f);
+        status = find_singularities(mesh, topology, &fr, u_re, u_im, mirrored, ctx);
+    }
+    if (!status) {
+        alignment_figures(mesh, topology, mirrored);
+        mirrored->singularity_ms = 1e3 * (pz_seconds() - start);
+    }
+    frames_free(&fr);
+    free(u_re), free(u_im);
+    if (status)
+        pz_field_free(&mirrored);
+    *out = mirrored;
+    return status;
 }

@@ -167,6 +167,19 @@ pz_status pz_field_compute(const pz_mesh *mesh, const pz_topology *topology, con
 void pz_field_free(pz_field **field);
 
 /**
+ * The mirror-symmetric version of a field (docs/field.md, "Symmetry"), into
+ * a new field *out: every free face's cross averaged with the cross of its
+ * mirror face (mirror_faces[f], -1 none: the face holding the mirror image
+ * of face f) reflected through the plane of unit normal `normal`, so the
+ * field is (nearly) its own mirror image and paths traced on one half mirror
+ * those on the other; constrained faces (border, sketch) keep their crosses.
+ * Singularities and alignment figures are recomputed. O(F). Errors:
+ * PZ_ERR_USAGE (a field of another mesh), PZ_ERR_NOMEM.
+ */
+pz_status pz_field_mirrored(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field,
+                            const int32_t *mirror_faces, const double normal[3], pz_field **out, pz_ctx *ctx);
+
+/**
  * Angle in degrees (0 .. 45) between the cross with arm `arm` and the line of
  * `direction`, both in the plane with unit normal `normal` (direction is
  * projected first). 0 when direction has no tangential part.

@@ -215,56 +215,15 @@ static int grid_build(const pz_mesh *mesh, double mean_edge, face_grid *grid)
     return 1;
 }
 
-/* Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection, 5.1.5). */
-static void closest_on_triangle(const double *p, const double *a, const double *b, const double *c, double *out)
-{
-    double ab[3], ac[3], ap[3], bp[3], cp[3];
-    pz_vec3_sub(b, a, ab), pz_vec3_sub(c, a, ac), pz_vec3_sub(p, a, ap);
-    double d1 = pz_vec3_dot(ab, ap), d2 = pz_vec3_dot(ac, ap);
-    if (d1 <= 0.0 && d2 <= 0.0) {
-        memcpy(out, a, 3 * sizeof *out);
-        return;
-    }
-    pz_vec3_sub(p, b, bp);
-    double d3 = pz_vec3_dot(ab, bp), d4 = pz_vec3_dot(ac, bp);
-    if (d3 >= 0.0 && d4 <= d3) {
-        memcpy(out, b, 3 * sizeof *out);
-        return;
-    }
-    double vc = d1 * d4 - d3 * d2;
-    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
-        double v = d1 / (d1 - d3);
-        for (int i = 0; i < 3; ++i) out[i] = a[i] + v * ab[i];
-        return;
-    }
-    pz_vec3_sub(p, c, cp);
-    double d5 = pz_vec3_dot(ab, cp), d6 = pz_vec3_dot(ac, cp);
-    if (d6 >= 0.0 && d5 <= d6) {
-        memcpy(out, c, 3 * sizeof *out);
-        return;
-    }
-    double vb = d5 * d2 - d1 * d6;
-    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
-        double w = d2 / (d2 - d6);
-        for (int i = 0; i < 3; ++i) out[i] = a[i] + w * ac[i];
-        return;
-    }
-    double va = d3 * d6 - d5 * d4;
-    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-        double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        for (int i = 0; i < 3; ++i) out[i] = b[i] + w * (c[i] - b[i]);
-        return;
-    }
-    double denom = 1.0 / (va + vb + vc), v = vb * denom, w = vc * denom;
-    for (int i = 0; i < 3; ++i) out[i] = a[i] + ab[i] * v + ac[i] * w;
-}
-
 static double face_distance2(const pz_mesh *mesh, int32_t f, const double *p)
 {
     const int32_t *face = mesh->faces + 3 * (size_t)f;
-    double q[3], d[3];
-    closest_on_triangle(p, mesh->positions + 3 * (size_t)face[0], mesh->positions + 3 * (size_t)face[1],
-                        mesh->positions + 3 * (size_t)face[2], q);
+    const double *a = mesh->positions + 3 * (size_t)face[0], *b = mesh->positions + 3 * (size_t)face[1],
+                 *c = mesh->positions + 3 * (size_t)face[2];
+    double bary[3], q[3], d[3];
+    pz_geom_closest_on_triangle(p, a, b, c, bary);
+    for (int i = 0; i < 3; ++i)
+        q[i] = bary[0] * a[i] + bary[1] * b[i] + bary[2] * c[i];
     pz_vec3_sub(p, q, d);
     return pz_vec3_dot(d, d);
 }

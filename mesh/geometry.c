@@ -161,3 +161,52 @@ void pz_geom_developability(const pz_mesh *mesh, const pz_topology *topology, do
             e_dev[v] = fabs(e_dev[v] - 2.0 * PZ_PI);
     }
 }
+
+void pz_geom_closest_on_triangle(const double *p, const double *a, const double *b, const double *c, double bary[3])
+{
+    double ab[3], ac[3], ap[3];
+    pz_vec3_sub(b, a, ab);
+    pz_vec3_sub(c, a, ac);
+    pz_vec3_sub(p, a, ap);
+    double d1 = pz_vec3_dot(ab, ap), d2 = pz_vec3_dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) {
+        bary[0] = 1, bary[1] = 0, bary[2] = 0;
+        return;
+    }
+    double bp[3];
+    pz_vec3_sub(p, b, bp);
+    double d3 = pz_vec3_dot(ab, bp), d4 = pz_vec3_dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) {
+        bary[0] = 0, bary[1] = 1, bary[2] = 0;
+        return;
+    }
+    double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        double w = d1 / (d1 - d3);
+        bary[0] = 1 - w, bary[1] = w, bary[2] = 0;
+        return;
+    }
+    double cp[3];
+    pz_vec3_sub(p, c, cp);
+    double d5 = pz_vec3_dot(ab, cp), d6 = pz_vec3_dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) {
+        bary[0] = 0, bary[1] = 0, bary[2] = 1;
+        return;
+    }
+    double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        double w = d2 / (d2 - d6);
+        bary[0] = 1 - w, bary[1] = 0, bary[2] = w;
+        return;
+    }
+    double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        bary[0] = 0, bary[1] = 1 - w, bary[2] = w;
+        return;
+    }
+    double denom = 1 / (va + vb + vc);
+    bary[1] = vb * denom;
+    bary[2] = vc * denom;
+    bary[0] = 1 - bary[1] - bary[2];
+}

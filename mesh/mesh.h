@@ -349,6 +349,12 @@ void pz_geom_angle_defect(const pz_mesh *mesh, const pz_topology *topology, doub
  * for interior vertices, 0 for boundary vertices.
  */
 void pz_geom_developability(const pz_mesh *mesh, const pz_topology *topology, double *e_dev);
+/**
+ * The point of triangle (a, b, c) closest to p, as barycentric coordinates
+ * bary[0..2] (non-negative, summing to 1): Ericson, Real-Time Collision
+ * Detection, 5.1.5. A degenerate triangle gives one of its closest points.
+ */
+void pz_geom_closest_on_triangle(const double *p, const double *a, const double *b, const double *c, double bary[3]);
 
 /* ------------------------------------------------------------------------ */
 /* Cutting                                                                   */

@@ -11,6 +11,8 @@
  *   flatten.c      the chosen back-end, the pieces laid out, metrics
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
+ *   mirror.c       exact mirror pieces: pairs and pieces crossed by the plane
+ *   mirror_pairing.c  their outlines paired (mirror_internal.h), the residual
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
  *   names.c        the pieces' names from their place on the garment
  *   report.c       report.json (pz_result_report)
@@ -119,6 +121,10 @@ pz_status pl_segmenter_choose(pl_segmenter *segmenter, pz_mesh *garment, pl_pane
 /** The verdict round: 1 accepts the flattening (uv) of the panels last chosen, 0 asks for a new layout. */
 int pl_segmenter_accept(pl_segmenter *segmenter, const pz_pattern *pattern, const double *uv, pz_ctx *ctx);
 
+/** The mirror pieces of the panels last chosen made exact in uv (pl_exact_mirror_pieces), when the layout used a
+ * plane. */
+pz_status pl_segmenter_exact_mirrors(pl_segmenter *segmenter, const pz_pattern *pattern, double *uv, pz_ctx *ctx);
+
 /** Moves what the run reports (segmentation, field, truing, rounds, ladder) into the result. */
 void pl_segmenter_report(pl_segmenter *segmenter, pz_result *result);
 
@@ -169,10 +175,13 @@ double *pl_strain_of_poses(const pz_pattern *pattern, const double *uv, const pz
  * worst strain over the extra poses); seam and dart length mismatch and dart
  * intakes from the metrics; the piece's width and its extent across the grain
  * on the pattern (uv). panels (pattern->panel_count) receives each panel's
- * figures and failure bits.
+ * figures and failure bits. segment (may be NULL): the layout, when its
+ * panels are the pattern's: a mirror pair is one pattern piece, so the copy
+ * of a pair (pz_segment_panel.copy) takes its partner's corners.
  */
 pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const double *uv,
                           const pz_metrics *metrics, const double *pose_strain, const pz_goal_options *goals,
+                          const pz_segment_result *segment,
                           pz_goal_result *panels, pz_ctx *ctx);
 
 /** The final verdict of a result (goals met, reasons, one note when missed) from its metrics. */
@@ -187,6 +196,27 @@ pz_status pl_name_pieces(pz_result *result, pz_ctx *ctx);
 
 /** The flattened pieces' own mirror symmetry (result->pattern_mirror_*), when the layout found a plane. */
 void pl_measure_pattern_symmetry(pz_result *result, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- mirror.c */
+
+/**
+ * Makes the mirror pieces of a layout made with a plane exact in uv (docs/segment.md, "Exact mirror pieces"):
+ * each pair (a panel and its copy, pz_segment_panel.copy) and each panel crossed by the plane (its own mirror
+ * panel), unless that pushes a panel past the strain goal max_strain. *pieces: the pairs and self-mirrored
+ * panels, *exact: those made exact. Nothing without a plane or when the pattern's panels are not the layout's.
+ * PZ_ERR_NOMEM.
+ */
+pz_status pl_exact_mirror_pieces(const pz_pattern *pattern, const pz_segment_result *segment, double max_strain,
+                                 double *uv, int32_t *exact, int32_t *pieces, pz_ctx *ctx);
+
+/**
+ * The residual of the mirror pieces (mm): every outline vertex of a piece against its partner's outline
+ * reflected (the best 2D reflection through the anchors), both ways; RMS and largest over all pairs and pieces
+ * crossed by the plane; -1 when there is none. panel_largest (panel count, may be NULL): each panel's pair's
+ * largest (-1: not in one). PZ_ERR_NOMEM.
+ */
+pz_status pl_mirror_residual(const pz_pattern *pattern, const double *uv, const pz_segment_result *segment,
+                             double *rms, double *largest, double *panel_largest, pz_ctx *ctx);
 
 /** The garment's faces bucketed by pattern panel (CSR); 0 when out of memory. The caller frees both. */
 int pl_faces_by_panel(const pz_pattern *pattern, int32_t **offsets, int32_t **order);

@@ -76,6 +76,7 @@ void pz_result_free(pz_result **result)
     pz_pattern_free(&r->pattern);
     free(r->uv);
     free(r->panel_mirror);
+    free(r->panel_mirror_residual_mm);
     pl_backend_outcome_clear(&r->backend);
     for (int i = 0; r->metrics && i < r->metrics_count; ++i)
         pz_metrics_free(&r->metrics[i]);
@@ -260,6 +261,8 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
             status = pl_flatten_pattern(options, result->pattern, run->garment.mesh->unit_scale, result->grain,
                                         strain_limit, result->uv, &result->backend, ctx);
         }
+        if (status == PZ_OK && run->segmenter) /* mirror pieces exact before the verdict judges them */
+            status = pl_segmenter_exact_mirrors(run->segmenter, result->pattern, result->uv, ctx);
         int accepted = 1;
         if (status == PZ_OK && run->segmenter)
             accepted = pl_segmenter_accept(run->segmenter, result->pattern, result->uv, ctx);

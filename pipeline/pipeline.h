@@ -124,7 +124,9 @@ typedef struct pz_run_options {
     pz_field_options field;          /* sketch and poses are set by the run */
     /* segment */
     pz_goal_options goals;           /* S, C, seam mismatch: pz_goal_options_default (its grain is set by the run) */
-    pz_segment_options segment;      /* symmetry, darts, candidates, threads (its goals come from `goals`) */
+    pz_segment_options segment;      /* symmetry, darts, candidates, threads (its goals come from `goals`);
+                                        segment.symmetry_plane (PZ_SYMMETRY_PLANE) in the input's units, like a
+                                        sketch file: pz_run scales its offset with the mesh */
     const char *sketch_path;         /* seams the user drew: {"curves": [[[x,y,z], ...]]} in the mesh's units */
     const pz_sketch *sketch;         /* or the same in memory (millimetres); both may be given */
     int truing;                      /* 1 (default): seams traced along mesh edges are smoothed on the surface */
@@ -228,6 +230,16 @@ typedef struct pz_result {
     int looser_seeded;
     double pattern_mirror_rms_mm;    /* mirror symmetry of the flattened pieces; -1 when not measured */
     double pattern_mirror_max_mm;
+    /* The mirror plane (docs/segment.md, "Symmetry"): found or given before the field (its figures only: the
+     * maps are NULL; the layout's own copy is segment->symmetry), whether the layout used it, and the panel
+     * counts of the first layouts with and without it (-1: not made). */
+    pz_symmetry symmetry;
+    int symmetry_used;
+    int32_t pieces_with_symmetry, pieces_without_symmetry;
+    int32_t mirror_pieces;           /* mirror pairs and panels crossed by the plane in the final layout */
+    int32_t exact_mirror_pieces;     /* those made exact mirror images (docs/segment.md, "Exact mirror pieces") */
+    double *panel_mirror_residual_mm; /* pattern->panel_count: the largest outline residual of each panel's mirror
+                                         pair (or of itself, crossed by the plane), -1 none; or NULL */
     /* export */
     char *garment_name;              /* the name on the pieces (options.output.garment_name points here when the
                                         options named none: the input's base name) */

@@ -531,6 +531,8 @@ static int extend_panels(const pz_result *result, cJSON *root)
         ok &= add_plain_number(item, "width_mm", pz_round(goals->min_width_mm, 3));
         ok &= add_plain_number(item, "across_grain_mm", pz_round(goals->across_grain_mm, 3));
         ok &= cJSON_AddBoolToObject(item, "shape_forced_by_input", goals->width_forced || goals->area_forced) != NULL;
+        ok &= add_plain_number(item, "mirror_residual_mm",
+                               result->panel_mirror_residual_mm ? pz_round(result->panel_mirror_residual_mm[p], 6) : -1);
         char text[256];
         pz_goal_describe(goals, &result->options.goals, text, sizeof text);
         ok &= cJSON_AddBoolToObject(item, "goals_met", goals->failures == 0) != NULL;
@@ -547,14 +549,28 @@ static int extend_symmetry(const pz_result *result, cJSON *object)
     cJSON *symmetry = cJSON_AddObjectToObject(object, "symmetry");
     if (!symmetry)
         return 0;
-    const pz_symmetry *plane = &segment->symmetry;
+    /* The plane the run found (or was given) before the field; the layout's own copy when it used it. */
+    const pz_symmetry *plane = &result->symmetry;
+    int used = result->symmetry_used && segment->symmetry.found;
     static const char *const axes[] = {"x", "y", "z"};
     int ok = cJSON_AddBoolToObject(symmetry, "found", plane->found) != NULL;
-    ok &= cJSON_AddStringToObject(symmetry, "axis", plane->found && plane->axis >= 0 && plane->axis < 3
-                                                         ? axes[plane->axis] : "none") != NULL;
-    ok &= add_plain_number(symmetry, "offset", plane->found ? plane->offset : 0);
-    ok &= add_plain_number(symmetry, "mesh_residual_mm", plane->found ? plane->residual_mm : 0);
-    ok &= add_plain_number(symmetry, "layout_residual_mm", plane->found ? segment->symmetry_residual_mm : 0);
+    ok &= cJSON_AddBoolToObject(symmetry, "used", used) != NULL;
+    ok &= cJSON_AddStringToObject(symmetry, "axis", !plane->found ? "none"
+                                                     : plane->axis >= 0 && plane->axis < 3 ? axes[plane->axis]
+                                                                                           : "oblique") != NULL;
+    cJSON *normal = cJSON_AddArrayToObject(symmetry, "normal");
+    for (int k = 0; normal && k < 3; ++k)
+        ok &= cJSON_AddItemToArray(normal, cJSON_CreateNumber(pz_round(plane->normal[k], 9)));
+    ok &= normal != NULL;
+    ok &= add_plain_number(symmetry, "offset", plane->offset);
+    ok &= add_plain_number(symmetry, "mesh_residual_mm", plane->residual_mm);
+    ok &= add_plain_number(symmetry, "mesh_residual_rel", pz_round(plane->residual_rel, 6));
+    ok &= add_plain_number(symmetry, "mesh_rms_mm", plane->rms_mm);
+    ok &= add_plain_number(symmetry, "pieces_with_plane", result->pieces_with_symmetry);
+    ok &= add_plain_number(symmetry, "pieces_without_plane", result->pieces_without_symmetry);
+    ok &= add_plain_number(symmetry, "layout_residual_mm", used ? segment->symmetry_residual_mm : 0);
+    ok &= add_plain_number(symmetry, "mirror_pieces", used ? result->mirror_pieces : 0);
+    ok &= add_plain_number(symmetry, "exact_mirror_pieces", used ? result->exact_mirror_pieces : 0);
     ok &= add_plain_number(symmetry, "pattern_residual_mm", pz_round(result->pattern_mirror_rms_mm, 6));
     ok &= add_plain_number(symmetry, "pattern_residual_max_mm", pz_round(result->pattern_mirror_max_mm, 6));
     return ok;

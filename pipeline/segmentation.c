@@ -37,6 +37,11 @@ typedef struct goal_setting {
     int32_t strain_rounds;           /* of them, those that vetoed a panel over S (or not injective) */
     pz_segment_cache *cache;         /* evaluations shared by the rounds */
     char verdict_reasons[512];       /* the last rejection's panels, for the progress note */
+    /* With a plane: whether this setting's layouts use it, decided by its first layouts with and without
+     * (choose_symmetry), as a run with these goals decides. */
+    int symmetry_decided, symmetry_used;
+    int plane_dropped;               /* the joint flattening rejected the mirrored layout (drop_rejected_plane) */
+    int32_t pieces_with, pieces_without;
 } goal_setting;
 
 static void goal_setting_clear(goal_setting *goals)
@@ -72,6 +77,11 @@ struct pl_segmenter {
     pz_truing_result truing_result;
     pz_mesh *garment;                   /* the garment last segmented (for the verdict's goals) */
     pz_field *field;                    /* the cross-field of the original surface, computed once */
+    /* The mirror plane (docs/segment.md, "Symmetry"): detected (or the user's) once, before the field. */
+    pz_symmetry symmetry;
+    pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
+    int plane;                          /* 1: a plane was found or given (each goal setting decides its use) */
+    int32_t mirror_pieces, exact_mirror_pieces; /* of the last flattening (pl_segmenter_exact_mirrors) */
     /* Monotone panel counts (ladder_cuts): the looser settings' final cuts, seeded into this run's layout. */
     int ladder_done;                    /* 1: the layout and its verdict rounds were made by solve_setting */
     int seeded;                         /* 1: its own layout had fewer panels than a looser setting's: seeded */
@@ -80,6 +90,30 @@ struct pl_segmenter {
     int32_t seed_panels;                /* the most panels among the parent settings */
     double ladder_ms;
 };
+
+/*
+ * A mirrored layout the joint flattening rejects at its first verdict is
+ * dropped for the layout without the plane: its layouts were chosen on one
+ * half's estimates, and redoing them under vetoes grows both sides at once
+ * (a posed bodice went 7 -> 16 panels where the plain layout settles at 5).
+ * The plane was kept for panels, not for a cascade of verdict rounds.
+ */
+static void drop_rejected_plane(goal_setting *goals)
+{
+    if (!goals->symmetry_used || goals->verdict_rounds != 1)
+        return;
+    goals->symmetry_used = 0;
+    goals->plane_dropped = 1;             /* segment_once says so */
+    pz_segment_cache_free(&goals->cache); /* its evaluations were of mirrored layouts; segment_once makes anew */
+}
+
+/* The back-ends whose pieces may be made exact mirror images: WireWarping and spring-mass make every seam's two
+ * sides exactly as long, which moving an outline would undo (their mirror pieces stay as flattened). */
+static int may_make_exact(const pl_segmenter *seg)
+{
+    pz_backend backend = seg->options->flatten.backend;
+    return backend != PZ_BACKEND_WIREWARP && backend != PZ_BACKEND_SPRINGMASS;
+}
 
 static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_segment_result *segment,
                          const pz_pattern *pattern, const double *uv, const pz_metrics *metrics,
@@ -218,6 +252,11 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     options.user = progress;
     options.vetoed = goals->vetoed;
     options.vetoed_count = goals->vetoed_count;
+    /* The plane the pipeline detected (or was given) once: the segmentation uses it as given, or none. */
+    int mirrored = seg->plane && goals->symmetry_used;
+    options.symmetry = mirrored ? PZ_SYMMETRY_PLANE : PZ_SYMMETRY_OFF;
+    memcpy(options.symmetry_plane, seg->symmetry.normal, sizeof seg->symmetry.normal);
+    options.symmetry_plane[3] = seg->symmetry.offset;
     if (!goals->cache && !(goals->cache = pz_segment_cache_create()))
         return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
     options.cache = goals->cache;
@@ -226,10 +265,127 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
      * round that vetoed only darts that close up in the joint flattening (intake) asks for none. */
     int margin_rounds = goals->strain_rounds > 1 ? goals->strain_rounds - 1 : 0;
     options.strain_margin = fmin(VERDICT_MARGIN_MAX, VERDICT_MARGIN_STEP * margin_rounds);
+    if (goals->plane_dropped == 1) {
+        goals->plane_dropped = 2;
+        pz_note(progress, "run: symmetry: the joint flattening rejected the mirrored layout; the layout without "
+                "the plane is made instead");
+    }
     if (goals->verdict_rounds > 0)
         pz_note(progress, "run: segment again (round %d): the joint flattening rejected %s",
                 (int)goals->verdict_rounds + 1, goals->verdict_reasons);
-    return pz_segment(garment, topology, seg->field, &options, out, ctx);
+    return pz_segment(garment, topology, mirrored ? seg->mirror_field : seg->field, &options, out, ctx);
+}
+
+/*
+ * The mirror plane, once, before the field: found (AUTO, within its
+ * tolerance) or given (an axis, or the user's plane in the input's units),
+ * and the field symmetrized about it (pz_field_mirrored) for the layouts made
+ * with it. The plain field stays for the layout without it.
+ */
+static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_topology *topology, pz_ctx *ctx)
+{
+    const pz_segment_options *given = &seg->options->segment;
+    double plane[4];
+    memcpy(plane, given->symmetry_plane, sizeof plane);
+    plane[3] *= garment->unit_scale; /* the user's plane is in the input's units, the garment in millimetres */
+    pz_status status = pz_symmetry_detect(garment, topology, given->symmetry, plane, 0, &seg->symmetry, ctx);
+    seg->plane = status == PZ_OK && seg->symmetry.found;
+    if (status == PZ_OK && seg->symmetry.found)
+        status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
+                                   &seg->mirror_field, ctx);
+    if (status == PZ_OK && given->symmetry != PZ_SYMMETRY_OFF)
+        pz_note(ctx, "run: symmetry: %s plane (%.4f, %.4f, %.4f) . p = %.2f mm, the garment within %.2f mm of its "
+                "mirror image (%.2f %% of its diagonal)", seg->symmetry.found ? "" : "no good enough",
+                seg->symmetry.normal[0], seg->symmetry.normal[1], seg->symmetry.normal[2], seg->symmetry.offset,
+                seg->symmetry.residual_mm, 100 * seg->symmetry.residual_rel);
+    return status;
+}
+
+/*
+ * With a plane: the first layout made on one half and mirrored, and the
+ * layout without the plane; the plane stays when its layout has no more
+ * panels. Finding or forcing a plane must never multiply the pieces (a
+ * mirrored layout pays every split twice): otherwise the run says so and goes
+ * on without it, as --symmetry off would. *out: the layout kept (NULL: only
+ * compared, for a caller that makes its own).
+ */
+/*
+ * Whether the mirrored layout is kept: mirror-image pieces ("Cut 2") are what
+ * a pattern maker expects of a symmetric garment, and a layout made on one
+ * half pays each split twice, so it may cost a little more: at most
+ * SYMMETRY_EXTRA_PIECES pieces or SYMMETRY_EXTRA_SHARE more than the layout
+ * without the plane, whichever allows more. Beyond that the plane would
+ * multiply the pieces, and it is not used.
+ */
+#define SYMMETRY_EXTRA_PIECES 2
+#define SYMMETRY_EXTRA_SHARE 0.25
+static int symmetry_worth_it(int32_t with, int32_t without)
+{
+    double allowed = fmax(without + SYMMETRY_EXTRA_PIECES, (1.0 + SYMMETRY_EXTRA_SHARE) * without);
+    return with <= allowed;
+}
+
+static pz_status choose_symmetry(pl_segmenter *seg, const pz_mesh *garment, const pz_topology *topology,
+                                 const pz_sketch *sketch, goal_setting *goals, pz_segment_result **out, pz_ctx *ctx)
+{
+    goals->symmetry_decided = 1;
+    goals->symmetry_used = seg->plane;
+    goals->pieces_with = goals->pieces_without = -1;
+    if (!seg->plane)
+        return out ? segment_once(seg, garment, topology, sketch, goals, NULL, ctx, out, ctx) : PZ_OK;
+    /* The two layouts are independent: made side by side (two threads; each one's own evaluations then run on
+     * one thread), the layout without the plane with its own cache, kept when its layout is. */
+    goal_setting plain = *goals;
+    plain.symmetry_used = 0;
+    plain.cache = pz_segment_cache_create();
+    if (!goals->cache && !(goals->cache = pz_segment_cache_create())) {
+        pz_segment_cache_free(&plain.cache);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    }
+    if (!plain.cache)
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    pz_ctx quiet, quiet_plain;
+    pz_ctx_quiet(ctx, &quiet);
+    pz_ctx_quiet(ctx, &quiet_plain);
+    pz_segment_result *with = NULL, *without = NULL;
+    pz_status status = PZ_OK, plain_status = PZ_OK;
+#pragma omp parallel sections num_threads(2)
+    {
+#pragma omp section
+        status = segment_once(seg, garment, topology, sketch, goals, NULL, out ? ctx : &quiet, &with, &quiet);
+#pragma omp section
+        plain_status = segment_once(seg, garment, topology, sketch, &plain, NULL, &quiet_plain, &without, &quiet_plain);
+    }
+    if (status == PZ_OK)
+        status = plain_status;
+    if (status != PZ_OK) /* the first failure's message, as one call would have left it */
+        pz_error(ctx, status, "%s", plain_status != PZ_OK && quiet.error[0] == '\0' ? quiet_plain.error : quiet.error);
+    if (status == PZ_OK) {
+        goals->pieces_with = with->panel_count;
+        goals->pieces_without = without->panel_count;
+        goals->symmetry_used = symmetry_worth_it(with->panel_count, without->panel_count);
+        if (goals == &seg->goals && !goals->symmetry_used)
+            pz_note(ctx, "run: symmetry: the layout made on one half and mirrored has %d panels, without the plane "
+                    "%d: the plane is not used", (int)with->panel_count, (int)without->panel_count);
+        else if (goals == &seg->goals)
+            pz_note(ctx, "run: symmetry: the layout made on one half and mirrored has %d panels (%d without the "
+                    "plane)", (int)with->panel_count, (int)without->panel_count);
+    }
+    if (status == PZ_OK && !goals->symmetry_used) { /* the evaluations of the layout kept go on with it */
+        pz_segment_cache *swap = goals->cache;
+        goals->cache = plain.cache, plain.cache = swap;
+    }
+    pz_segment_cache_free(&plain.cache);
+    if (status == PZ_OK && out) {
+        *out = goals->symmetry_used ? with : without;
+        if (goals->symmetry_used)
+            with = NULL;
+        else
+            without = NULL;
+    }
+    pz_segment_result_free(&with);
+    pz_segment_result_free(&without);
+    return status;
 }
 
 pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choice *choice, pz_ctx *ctx)
@@ -251,10 +407,12 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         options.use_poses = 1;
         pl_stage(ctx, "field", 0.1, 0.2, "cross-field");
         status = pz_field_compute(garment, topology, &options, &seg->field, ctx);
+        if (status == PZ_OK)
+            status = find_plane(seg, garment, topology, ctx);
         seg->field_ms = pz_elapsed_ms(start, pz_seconds());
         if (status == PZ_OK)
             pz_note(ctx, "run: field: %.0f ms, %d singularities", seg->field_ms,
-                    (int)seg->field->singularity_count);
+                    (int)(seg->mirror_field ? seg->mirror_field : seg->field)->singularity_count);
     }
     double field_end = pz_seconds();
     pl_stage(ctx, "segment", 0.2, 0.7, "layout");
@@ -278,7 +436,10 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
     } else if (status == PZ_OK) {
         seg->field_singularities = seg->field->singularity_count;
         pz_segment_result_free(&seg->segment);
-        status = segment_once(seg, garment, topology, sketch, &seg->goals, NULL, ctx, &seg->segment, ctx);
+        if (!seg->goals.symmetry_decided)
+            status = choose_symmetry(seg, garment, topology, sketch, &seg->goals, &seg->segment, ctx);
+        else
+            status = segment_once(seg, garment, topology, sketch, &seg->goals, NULL, ctx, &seg->segment, ctx);
     }
     seg->segment_ms = pz_elapsed_ms(field_end, pz_seconds());
     if (status == PZ_OK && seg->options->truing) {
@@ -360,6 +521,9 @@ static pz_status ladder_round(const pl_segmenter *seg, pz_mesh *garment, const p
         status = PZ_ERR_NOMEM;
     if (status == PZ_OK)
         status = ladder_flatten(seg, pattern, goals->goals.max_strain, uv, &quiet);
+    int32_t exact = 0, pieces = 0; /* the pieces as the run's own flattening gives them (flatten_rounds) */
+    if (status == PZ_OK && seg->plane && goals->symmetry_used && may_make_exact(seg))
+        status = pl_exact_mirror_pieces(pattern, segment, goals->goals.max_strain, uv, &exact, &pieces, &quiet);
     pz_fabric fabric = seg->options->flatten.fabric;
     if (status == PZ_OK)
         status = pz_metrics_compute(pattern, uv, 0, &fabric, &metrics, &quiet);
@@ -388,6 +552,8 @@ static pz_status verdict_rounds(pl_segmenter *seg, pz_mesh *garment, const pz_to
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
     pz_status status = PZ_OK;
+    if (!goals->symmetry_decided) /* as the run with these goals decides it, before its verdict rounds */
+        status = choose_symmetry(seg, garment, topology, sketch, goals, NULL, ctx);
     for (int accepted = 0; status == PZ_OK && !accepted;) {
         pz_segment_result_free(out);
         status = keep_or_restore_original(seg, garment, ctx);
@@ -423,9 +589,12 @@ static pz_status solve_setting(pl_segmenter *seg, pz_mesh *garment, const pz_top
     if (status == PZ_OK)
         status = verdict_rounds(seg, garment, topology, sketch, goals, NULL, out, ctx);
     if (status == PZ_OK && seeds && (*out)->panel_count < *most_panels) {
+        goal_setting kept = *goals; /* the symmetry decision stands: it was this setting's own */
         goal_setting_clear(goals);
         memset(goals, 0, sizeof *goals);
         set_goals(seg, goals, max_strain, max_corners);
+        goals->symmetry_decided = kept.symmetry_decided, goals->symmetry_used = kept.symmetry_used;
+        goals->pieces_with = kept.pieces_with, goals->pieces_without = kept.pieces_without;
         *seeded = 1;
         status = verdict_rounds(seg, garment, topology, sketch, goals, seeds, out, ctx);
     }
@@ -570,16 +739,23 @@ static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_s
     /* Every goal, judged as the report will judge it: strain and injectivity on the joint flattening,
      * disk and corners on the trued outline, seam lengths on the pattern. */
     if (!bucketed || !judged || !grown ||
-        pl_judge_panels(garment, pattern, uv, metrics, pose_strain, &goals->goals, judged, &quiet) != PZ_OK) {
+        pl_judge_panels(garment, pattern, uv, metrics, pose_strain, &goals->goals, segment, judged, &quiet) != PZ_OK) {
         free(offsets), free(order), free(judged);
         return 1;
     }
+    /* A rejected panel's mirror image goes with it: vetoing one side alone would make the next layout
+     * differ between the sides (docs/segment.md, "Symmetry"). */
+    int mirrored = segment->symmetry.found && segment->panel_count == panels;
     for (int32_t p = 0; p < panels; ++p) {
-        if (!(judged[p].failures & vetoes))
+        int32_t m = mirrored ? segment->panels[p].mirror_panel : -1;
+        int rejected = (judged[p].failures & vetoes) != 0;
+        if (!rejected && !(m >= 0 && m != p && (judged[m].failures & vetoes)))
             continue;
         over_strain += (judged[p].failures & (PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE)) != 0;
         goals->vetoed[goals->vetoed_count + added++] =
             pz_segment_face_set_key(order + offsets[p], offsets[p + 1] - offsets[p]);
+        if (!rejected)
+            continue;
         /* Why, for the note the next round prints. */
         char text[256];
         pz_goal_describe(&judged[p], &goals->goals, text, sizeof text);
@@ -595,6 +771,7 @@ static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_s
     goals->vetoed_count += added;
     ++goals->verdict_rounds;
     goals->strain_rounds += over_strain > 0;
+    drop_rejected_plane(goals);
     return 0;
 }
 
@@ -616,6 +793,20 @@ int pl_segmenter_accept(pl_segmenter *seg, const pz_pattern *pattern, const doub
     free(pose_strain);
     pz_metrics_free(&metrics);
     return accepted;
+}
+
+pz_status pl_segmenter_exact_mirrors(pl_segmenter *seg, const pz_pattern *pattern, double *uv, pz_ctx *ctx)
+{
+    if (!seg->segment || !seg->plane || !seg->goals.symmetry_used || !may_make_exact(seg))
+        return PZ_OK;
+    int32_t exact = 0, pieces = 0;
+    pz_status status = pl_exact_mirror_pieces(pattern, seg->segment, seg->goals.goals.max_strain, uv, &exact, &pieces,
+                                              ctx);
+    seg->mirror_pieces = pieces, seg->exact_mirror_pieces = exact;
+    if (status == PZ_OK && pieces > 0)
+        pz_note(ctx, "run: symmetry: %d of %d mirror pieces made exact%s", (int)exact, (int)pieces,
+                exact < pieces ? " (the others would have gone past the strain goal)" : "");
+    return status;
 }
 
 /* ---------------------------------------------------------------- the segmenter */
@@ -668,6 +859,8 @@ void pl_segmenter_free(pl_segmenter **segmenter)
         free(seg->rungs[i].cuts);
     free(seg->rungs);
     pz_field_free(&seg->field);
+    pz_field_free(&seg->mirror_field);
+    pz_symmetry_clear(&seg->symmetry);
     free(seg->original_positions);
     free(seg->original_poses);
     free(seg);
@@ -688,4 +881,11 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->timings.field = seg->field_ms;
     result->timings.segment = seg->segment_ms;
     result->timings.looser_goals = seg->ladder_ms;
+    result->symmetry = seg->symmetry; /* the plane's figures; its maps stay with the segmenter */
+    result->symmetry.vertex_mirror = NULL, result->symmetry.vertex_side = NULL, result->symmetry.face_mirror = NULL;
+    result->symmetry_used = seg->plane && seg->goals.symmetry_used;
+    result->pieces_with_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_with : -1;
+    result->pieces_without_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_without : -1;
+    result->mirror_pieces = seg->mirror_pieces;
+    result->exact_mirror_pieces = seg->exact_mirror_pieces;
 }

@@ -6,7 +6,7 @@
  * seam and dart length mismatch from the pattern's seams. The verdict rounds
  * of the segmentation (segmentation.c) call the same judge.
  *
- * And the flattened pieces' own mirror symmetry.
+ * And the flattened pieces' own mirror symmetry (measured by pipeline/mirror.c).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -102,8 +102,24 @@ static pz_status piece_figures(const pz_pattern *pattern, const double *uv, cons
     return status;
 }
 
+/* The copy of a mirror pair is cut from its partner's piece, reflected: its outline's corners are the partner's. */
+static void judge_copies(const pz_segment_result *segment, const pz_goal_options *goals, int32_t panel_count,
+                         pz_goal_result *panels)
+{
+    if (!segment || segment->panel_count != panel_count)
+        return;
+    for (int32_t p = 0; p < panel_count; ++p) {
+        int32_t q = segment->panels[p].mirror_panel;
+        if (!segment->panels[p].copy || q < 0 || q >= panel_count || panels[p].corners < 0)
+            continue;
+        panels[p].corners = panels[q].corners;
+        panels[p].failures = pz_goal_judge(goals, &panels[p]);
+    }
+}
+
 pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const double *uv,
                           const pz_metrics *metrics, const double *pose_strain, const pz_goal_options *goals,
+                          const pz_segment_result *segment,
                           pz_goal_result *panels, pz_ctx *ctx)
 {
     int32_t panel_count = pattern->panel_count;
@@ -155,6 +171,8 @@ pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, con
         status = piece_figures(pattern, uv, metrics, face_offsets, face_ids, goals, panels, ctx);
     for (int32_t p = 0; p < panel_count && status == PZ_OK; ++p)
         panels[p].failures = pz_goal_judge(goals, &panels[p]);
+    if (status == PZ_OK)
+        judge_copies(segment, goals, panel_count, panels);
     free(mismatch);
     free(edge_cut);
     free(face_offsets);
@@ -218,8 +236,8 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
     pz_status status =
-        pl_judge_panels(result->garment, pattern, result->uv, result->metrics[0], pose_strain, &goals, verdict->panels,
-                        &quiet);
+        pl_judge_panels(result->garment, pattern, result->uv, result->metrics[0], pose_strain, &goals, result->segment,
+                        verdict->panels, &quiet);
     free(pose_strain);
     if (status != PZ_OK)
         return pz_error(ctx, status, "%s", quiet.error);
@@ -252,116 +270,16 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
 
 /* ---------------------------------------------------------------- pattern symmetry */
 
-/*
- * The pattern's own mirror symmetry (docs/segment.md, "Symmetry"): for each
- * mirrored pair of panels (and each panel that is its own mirror image), the
- * 2D reflection that best maps every vertex's pattern point onto its mirror
- * vertex's point in the partner panel (least squares: the points reflected,
- * then the best rotation and translation, Kabsch in 2D), and the distances
- * left. Layout residual 0 says the seams are placed symmetrically; this says
- * the flattened pieces are mirror images of each other.
- */
-typedef struct mirror_fit {
-    double sum_sq;       /* squared residuals summed over the points */
-    double max;          /* the largest residual, mm */
-    int64_t count;
-} mirror_fit;
-
-/* Fits one panel pair: points a[i] (panel p) -> b[i] (its mirror panel), n pairs. */
-static void fit_reflection(const double *a, const double *b, int32_t n, mirror_fit *fit)
-{
-    if (n < 3)
-        return;
-    double ca[2] = {0, 0}, cb[2] = {0, 0};
-    for (int32_t i = 0; i < n; ++i) {
-        ca[0] += a[2 * i], ca[1] += -a[2 * i + 1];  /* reflected about the u axis */
-        cb[0] += b[2 * i], cb[1] += b[2 * i + 1];
-    }
-    for (int k = 0; k < 2; ++k)
-        ca[k] /= n, cb[k] /= n;
-    double h00 = 0, h01 = 0, h10 = 0, h11 = 0;
-    for (int32_t i = 0; i < n; ++i) {
-        double x = a[2 * i] - ca[0], y = -a[2 * i + 1] - ca[1];
-        double u = b[2 * i] - cb[0], v = b[2 * i + 1] - cb[1];
-        h00 += x * u, h01 += x * v, h10 += y * u, h11 += y * v;
-    }
-    double angle = atan2(h01 - h10, h00 + h11), c = cos(angle), s = sin(angle);
-    for (int32_t i = 0; i < n; ++i) {
-        double x = a[2 * i] - ca[0], y = -a[2 * i + 1] - ca[1];
-        double du = c * x - s * y + cb[0] - b[2 * i], dv = s * x + c * y + cb[1] - b[2 * i + 1];
-        double d2 = du * du + dv * dv;
-        fit->sum_sq += d2;
-        fit->max = fmax(fit->max, sqrt(d2));
-        ++fit->count;
-    }
-}
-
-/* The RMS and largest residual (mm) over every mirrored panel pair; -1 when there is no pair. */
-static pz_status pattern_mirror_residual(const pz_pattern *pattern, const double *uv, const int32_t *vertex_mirror,
-                                         int32_t garment_vertices, const int32_t *panel_mirror, double *rms,
-                                         double *max, pz_ctx *ctx)
-{
-    *rms = *max = -1;
-    const pz_mesh *cut = pattern->mesh;
-    int32_t *vertex_panel = malloc(((size_t)cut->vertex_count + 1) * sizeof(int32_t));
-    int32_t *copy_start = calloc((size_t)garment_vertices + 2, sizeof(int32_t));
-    int32_t *copies = malloc(((size_t)cut->vertex_count + 1) * sizeof(int32_t));
-    double *a = malloc(((size_t)cut->vertex_count + 1) * 2 * sizeof(double));
-    double *b = malloc(((size_t)cut->vertex_count + 1) * 2 * sizeof(double));
-    if (!vertex_panel || !copy_start || !copies || !a || !b) {
-        free(vertex_panel), free(copy_start), free(copies), free(a), free(b);
-        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory measuring the pattern's symmetry");
-    }
-    for (int32_t f = 0; f < cut->face_count; ++f)
-        for (int k = 0; k < 3; ++k)
-            vertex_panel[cut->faces[3 * f + k]] = pattern->face_panel[f];
-    /* The cut-mesh copies of each garment vertex (CSR), to find a vertex's mirror in a given panel. */
-    for (int32_t v = 0; v < cut->vertex_count; ++v)
-        ++copy_start[pattern->vertex_origin[v] + 2];
-    for (int32_t g = 0; g < garment_vertices; ++g)
-        copy_start[g + 2] += copy_start[g + 1];
-    for (int32_t v = 0; v < cut->vertex_count; ++v)
-        copies[copy_start[pattern->vertex_origin[v] + 1]++] = v;
-    mirror_fit fit = {0, 0, 0};
-    for (int32_t p = 0; p < pattern->panel_count; ++p) {
-        int32_t m = panel_mirror[p];
-        if (m < p)
-            continue;  /* each pair once (m == p: a panel that is its own mirror image) */
-        int32_t n = 0;
-        for (int32_t v = 0; v < cut->vertex_count; ++v) {
-            int32_t g = pattern->vertex_origin[v], mirror = vertex_panel[v] == p ? vertex_mirror[g] : -1;
-            if (mirror < 0 || mirror >= garment_vertices)
-                continue;
-            for (int32_t i = copy_start[mirror]; i < copy_start[mirror + 1]; ++i)
-                if (vertex_panel[copies[i]] == m) {
-                    memcpy(a + 2 * n, uv + 2 * v, 2 * sizeof(double));
-                    memcpy(b + 2 * n, uv + 2 * copies[i], 2 * sizeof(double));
-                    ++n;
-                    break;
-                }
-        }
-        fit_reflection(a, b, n, &fit);
-    }
-    if (fit.count > 0) {
-        *rms = sqrt(fit.sum_sq / (double)fit.count);
-        *max = fit.max;
-    }
-    free(vertex_panel), free(copy_start), free(copies), free(a), free(b);
-    return PZ_OK;
-}
-
-/* result->pattern_mirror_*: the final pattern's mirror symmetry, measured on its points (uv). Left at -1
- * when it cannot be measured (no symmetry found, panels not the segmentation's). */
+/* result->pattern_mirror_*: the final pattern's mirror pieces, measured on their outlines (pl_mirror_residual).
+ * Left at -1 when they cannot be measured (no plane used, panels not the segmentation's). */
 void pl_measure_pattern_symmetry(pz_result *result, pz_ctx *ctx)
 {
     result->pattern_mirror_rms_mm = result->pattern_mirror_max_mm = -1;
-    const pz_segment_result *segment = result->segment;
-    const pz_pattern *pattern = result->pattern;
-    if (!segment || !segment->symmetry.found || segment->panel_count != pattern->panel_count || !result->panel_mirror)
+    if (!result->segment)
         return;
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
-    pattern_mirror_residual(pattern, result->uv, segment->symmetry.vertex_mirror, segment->symmetry.vertex_count,
-                            result->panel_mirror, &result->pattern_mirror_rms_mm, &result->pattern_mirror_max_mm,
-                            &quiet);
+    result->panel_mirror_residual_mm = malloc(((size_t)result->pattern->panel_count + 1) * sizeof(double));
+    pl_mirror_residual(result->pattern, result->uv, result->segment, &result->pattern_mirror_rms_mm,
+                       &result->pattern_mirror_max_mm, result->panel_mirror_residual_mm, &quiet);
 }

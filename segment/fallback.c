@@ -134,7 +134,7 @@ static int32_t shortest_to_outline(const seg_layout *layout, int32_t p, int32_t 
 /* The inner vertex of panel p to cut through, or -1. */
 static int32_t worst_vertex(const seg_layout *layout, int32_t p, const double *defect, panel_scratch *s)
 {
-    int by_corners = !(layout->panel_goals[p].failures & (PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED));
+    int by_corners = !(seg_panel_failures(layout, p) & (PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED));
     int32_t best = -1;
     double best_key = -1;
     if (by_corners) {
@@ -255,7 +255,7 @@ pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx)
         }
         int32_t skipped = 0;
         for (int32_t p = 0; p < panels; ++p) {
-            if (!(layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS))
+            if (!(seg_panel_failures(layout, p) & PZ_GOAL_SPLIT_MENDS))
                 continue;
             if (!both_sides && seg_panel_mirrored_side(layout, p)) {
                 ++skipped;

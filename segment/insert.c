@@ -38,7 +38,7 @@ static int32_t failing_panels(const seg_layout *layout)
 {
     int32_t failing = 0;
     for (int32_t p = 0; p < layout->panel_count; ++p)
-        failing += (layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS) != 0;
+        failing += (seg_panel_failures(layout, p) & PZ_GOAL_SPLIT_MENDS) != 0;
     return failing;
 }
 
@@ -73,6 +73,11 @@ static pz_status add_path(seg_layout *layout, const pz_trace_path *path, int ske
     return PZ_OK;
 }
 
+pz_status seg_add_path(seg_layout *layout, const pz_trace_path *path, int sketch, pz_ctx *ctx)
+{
+    return add_path(layout, path, sketch, ctx);
+}
+
 /* 1 when the path has an uncut interior edge inside a failing panel. */
 static int splits_failing(const seg_layout *layout, const pz_trace_path *path)
 {
@@ -82,7 +87,7 @@ static int splits_failing(const seg_layout *layout, const pz_trace_path *path)
         int32_t e = seg_edge_between(layout, path->vertices[i], path->vertices[(i + 1) % n]);
         if (e < 0 || layout->edge_cut[e] || t->edge_halfedge[2 * e + 1] < 0)
             continue;
-        if (layout->panel_goals[layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]].failures & PZ_GOAL_SPLIT_MENDS)
+        if ((seg_panel_failures(layout, layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]) & PZ_GOAL_SPLIT_MENDS))
             return 1;
     }
     return 0;
@@ -208,6 +213,8 @@ static pz_status make_candidates(seg_layout *layout, pz_trace_paths *traced, seg
                                         &local) != PZ_OK) {
                 memset(&c->mirror, 0, sizeof c->mirror);
                 c->usable = 0;
+            } else if (!seg_path_in_half(layout, &c->path, 0) || !seg_path_in_half(layout, &c->mirror, 1)) {
+                c->usable = 0; /* with halves, each path stays in its own (segment/mirror.c) */
             } else if (shared_fraction(&c->path, &c->mirror, mark) >= 0.8) {
                 pz_trace_path_clear(&c->mirror);
             } else if (pz_trace_paths_tangential(&c->path, &c->mirror, layout->mesh->vertex_count)) {
@@ -325,12 +332,10 @@ static void arm_direction(const pz_trace_graph *graph, int32_t v, int k, double 
         d[i] = ca * a[i] + cb * b[i];
 }
 
-/* Candidates traced on panel p's own submesh, mapped back to the garment (vertices and arms). */
-static pz_status panel_candidates(seg_layout *layout, int32_t p, pz_trace_paths **out, pz_ctx *ctx)
+pz_status seg_trace_faces(seg_layout *layout, const int32_t *faces, int32_t count, int32_t sources, pz_trace_paths **out,
+                          pz_ctx *ctx)
 {
     *out = NULL;
-    const int32_t *faces = layout->panel_faces + layout->panel_offsets[p];
-    int32_t count = layout->panel_offsets[p + 1] - layout->panel_offsets[p];
     pz_mesh *sub = NULL;
     int32_t *vertex_map = NULL, *face_map = NULL;
     pz_topology *topology = NULL;
@@ -349,8 +354,8 @@ static pz_status panel_candidates(seg_layout *layout, int32_t p, pz_trace_paths 
         for (int32_t f = 0; arms && f < count; ++f)
             memcpy(arms + 3 * f, layout->field->directions + 3 * face_map[f], 3 * sizeof(double));
         pz_trace_candidate_options options = {0};
-        options.border_sources = layout->max_candidates / 4 > 4 ? layout->max_candidates / 4 : 4;
-        options.interior_sources = options.border_sources;
+        options.border_sources = sources;
+        options.interior_sources = sources;
         options.threads = layout->threads;
         if (!status && pz_trace_graph_build(sub, topology, arms, &layout->options->graph, &graph, &local) == PZ_OK &&
             pz_trace_candidates(graph, sub, topology, &options, out, &local) == PZ_OK) {
@@ -374,6 +379,14 @@ static pz_status panel_candidates(seg_layout *layout, int32_t p, pz_trace_paths 
     return status;
 }
 
+/* Candidates traced on panel p's own submesh, mapped back to the garment (vertices and arms). */
+static pz_status panel_candidates(seg_layout *layout, int32_t p, pz_trace_paths **out, pz_ctx *ctx)
+{
+    int32_t sources = layout->max_candidates / 4 > 4 ? layout->max_candidates / 4 : 4;
+    return seg_trace_faces(layout, layout->panel_faces + layout->panel_offsets[p],
+                           layout->panel_offsets[p + 1] - layout->panel_offsets[p], sources, out, ctx);
+}
+
 /* One recursion level: candidates on every failing panel's submesh, inserted greedily. */
 static pz_status recurse_failing(seg_layout *layout, int32_t *inserted, pz_ctx *ctx)
 {
@@ -384,7 +397,7 @@ static pz_status recurse_failing(seg_layout *layout, int32_t *inserted, pz_ctx *
         return nomem(ctx);
     pz_status status = PZ_OK;
     for (int32_t p = 0; p < panels && !status; ++p) {
-        if (!(layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS))
+        if (!(seg_panel_failures(layout, p) & PZ_GOAL_SPLIT_MENDS))
             continue;
         if ((status = pz_check_cancel(ctx, "segment")))
             break;
@@ -474,7 +487,11 @@ pz_status seg_insert_all(seg_layout *layout, pz_segment_result *result, pz_ctx *
     options.interior_sources = layout->max_candidates / 2;
     options.threads = layout->threads;
     pz_trace_paths *traced = NULL;
-    pz_status status = pz_trace_candidates(layout->graph, layout->mesh, layout->topology, &options, &traced, ctx);
+    /* With a mirror plane the candidates come from one half (segment/mirror.c), mirrored when inserted: half the
+     * sources on half the surface, the whole garment's density (twice as many made twice the panels to remove). */
+    pz_status status = layout->face_half ? seg_trace_half(layout, layout->max_candidates / 4, &traced, ctx)
+                                         : pz_trace_candidates(layout->graph, layout->mesh, layout->topology, &options,
+                                                               &traced, ctx);
     seg_candidate *candidates = NULL;
     int32_t count = 0;
     if (!status)

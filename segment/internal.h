@@ -3,7 +3,8 @@
  * stages, result), segment/labels.c (the panels of the current cuts),
  * segment/evaluate.c (their goals, the evaluation cache, progress),
  * segment/insert.c (path insertion), segment/fallback.c (the cut through a
- * panel's worst vertex) and segment/removal.c (segments, removal, darts).
+ * panel's worst vertex), segment/mirror.c (the layout on one half of a
+ * symmetric garment) and segment/removal.c (segments, removal, darts).
  * Not part of the public interface.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -61,6 +62,12 @@ typedef struct seg_layout {
     int32_t max_candidates, max_depth;
     pz_trace_graph *graph;
     pz_symmetry symmetry;
+    /* With a mirror plane (segment/mirror.c): the side of each face (0: the half the layout is made on,
+     * 1: its mirror image) and the edges between the halves, cut first and removed last (NULL without). */
+    uint8_t *face_half;
+    uint8_t *edge_plane;
+    /* Each panel's mirror panel as of labelling `mirror->labelling` (segment/mirror.c, computed when asked). */
+    struct seg_panel_mirrors *mirrors;
     /* Vertex -> incident edges (CSR), for edge lookups and cut degrees. */
     int32_t *vertex_edge_offsets, *vertex_edges;
     uint8_t *edge_cut;
@@ -70,6 +77,7 @@ typedef struct seg_layout {
     /* Panels of the current cut flags (labels_valid = 0 once a flag changes: seg_label_panels relabels,
      * only around the edges whose flag differs from labelled_cut once `labelled`). */
     int labels_valid, labelled;
+    int64_t labelling;       /* counts the labellings (seg_label_panels) */
     uint8_t *labelled_cut;   /* edge_count: edge_cut as of the last labelling */
     int32_t *label_stack, *label_region, *label_spare; /* relabelling scratch (face_count; stack max(F, E)) */
     int32_t *face_panel;
@@ -91,8 +99,6 @@ typedef struct seg_layout {
 /* layout.c */
 int32_t seg_edge_between(const seg_layout *layout, int32_t a, int32_t b);
 int32_t seg_cut_degree(const seg_layout *layout, int32_t v);
-/* The edge of the mirror image of edge e (-1 none). */
-int32_t seg_mirror_edge(const seg_layout *layout, int32_t e);
 
 /* labels.c: relabels the panels after cut flags changed (nothing to do while labels_valid). */
 pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx);
@@ -108,6 +114,12 @@ void seg_progress(seg_layout *layout, const char *stage, pz_ctx *ctx);
 void seg_progress_part(seg_layout *layout, double limit, const char *stage, pz_ctx *ctx);
 
 /* insert.c */
+/* Inserts a path (copied): cuts its edges, owned by it; sketch: SEG_SKETCH | SEG_SEEDED bits (0: removable). */
+pz_status seg_add_path(seg_layout *layout, const pz_trace_path *path, int sketch, pz_ctx *ctx);
+/* Candidates traced on the submesh of faces[0..count-1] (`sources` border and interior sources), mapped back to
+ * the garment's vertices and graph arms; *out NULL when the faces have no topology of their own. */
+pz_status seg_trace_faces(seg_layout *layout, const int32_t *faces, int32_t count, int32_t sources,
+                          pz_trace_paths **out, pz_ctx *ctx);
 pz_status seg_insert_sketches(seg_layout *layout, pz_ctx *ctx);
 /* options->seed_cuts: cut from the start, owned by one empty path marked SEG_SEEDED (never removed). */
 pz_status seg_insert_seeds(seg_layout *layout, pz_ctx *ctx);
@@ -134,6 +146,29 @@ pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint
 #define SEG_FALLBACK_ROUNDS 16
 #define SEG_FALLBACK_MAX_CUTS 256
 pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx);
+
+/* mirror.c: the layout made on one half of a mirror-symmetric garment (docs/segment.md, "Symmetry"). */
+/* Splits the garment along the plane (face_half, edge_plane) and cuts the edges between the halves as
+ * removable paths; nothing without a plane. */
+pz_status seg_plane_cut(seg_layout *layout, pz_ctx *ctx);
+/* Frees what seg_plane_cut made. */
+void seg_mirror_free(seg_layout *layout);
+/* Candidates traced on half 0 only (sources: border and interior sources). */
+pz_status seg_trace_half(seg_layout *layout, int32_t sources, pz_trace_paths **out, pz_ctx *ctx);
+/* 1 when every edge of the path touches a face of `half` (always without halves): a path traced on one half,
+ * or its mirror image, that strays into the other would cross the paths there. */
+int seg_path_in_half(const seg_layout *layout, const pz_trace_path *path, uint8_t half);
+/* The goals panel p fails (its goals evaluated). With halves, a mirror pair across them is one pattern piece: both
+ * panels get the failures of both, but for the copy's (half 1) corners, which are its partner's (docs/segment.md,
+ * "Symmetry"); their goals must both be evaluated. */
+unsigned seg_panel_failures(const seg_layout *layout, int32_t p);
+/* The mirror partner of panel p across the halves (-1: none, or p straddles the plane). */
+int32_t seg_panel_partner(const seg_layout *layout, int32_t p);
+/* Panel p's goals as a pattern piece: its own figures, the pair's failures (seg_panel_failures) and, on half 1, its
+ * partner's corners. Returns 1 when p is the copy (on half 1) of its partner. */
+int seg_pair_goals(const seg_layout *layout, int32_t p, pz_goal_result *goals);
+/* The mirror panel of every panel (-1 none; itself when it straddles the plane): by the faces' mirror faces. */
+pz_status seg_mirror_panels(const seg_layout *layout, int32_t *mirror_panel, pz_ctx *ctx);
 
 /* removal.c */
 pz_status seg_segments_build(const seg_layout *layout, seg_segments *out, pz_ctx *ctx);

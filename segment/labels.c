@@ -298,5 +298,6 @@ pz_status seg_label_panels(seg_layout *layout, pz_ctx *ctx)
     /* After a failure the labels are unknown: the next call floods everything. */
     layout->labelled = status == PZ_OK;
     layout->labels_valid = status == PZ_OK;
+    ++layout->labelling; /* what was computed from the old labels (segment/mirror.c) is stale */
     return status;
 }

@@ -37,7 +37,6 @@
 
 #define DEFAULT_MAX_CANDIDATES 96
 #define DEFAULT_MAX_DEPTH 2
-#define MAX_AUTO_RESIDUAL_EDGES 0.25
 
 /* ---------------------------------------------------------------- helpers */
 
@@ -66,16 +65,6 @@ int32_t seg_cut_degree(const seg_layout *layout, int32_t v)
     for (int32_t i = layout->vertex_edge_offsets[v]; i < layout->vertex_edge_offsets[v + 1]; ++i)
         degree += layout->edge_cut[layout->vertex_edges[i]] != 0;
     return degree;
-}
-
-int32_t seg_mirror_edge(const seg_layout *layout, int32_t e)
-{
-    if (!layout->symmetry.found)
-        return -1;
-    const pz_topology *t = layout->topology;
-    int32_t h = t->edge_halfedge[2 * e];
-    return seg_edge_between(layout, layout->symmetry.vertex_mirror[pz_he_from(t, h)],
-                            layout->symmetry.vertex_mirror[pz_he_to(t, h)]);
 }
 
 static pz_status build_vertex_edges(seg_layout *layout, pz_ctx *ctx)
@@ -141,58 +130,17 @@ static pz_status remove_and_dart(seg_layout *layout, pz_segment_result *result, 
 
 /* ---------------------------------------------------------------- result */
 
-static int compare_int64(const void *l, const void *r)
-{
-    int64_t a = *(const int64_t *)l, b = *(const int64_t *)r;
-    return (a > b) - (a < b);
-}
-
-/*
- * Mirror panel of each panel: the panel holding most of its faces' mirror
- * images (itself when it straddles the plane). Votes are (panel, mirror
- * panel) pairs sorted and counted: O(F log F), whatever the panel count.
- */
+/* Mirror panel of each panel (segment/mirror.c). */
 static pz_status mirror_panels(const seg_layout *layout, pz_segment_result *result, pz_ctx *ctx)
 {
-    for (int32_t p = 0; p < result->panel_count; ++p)
-        result->panels[p].mirror_panel = -1;
-    if (!layout->symmetry.found)
-        return PZ_OK;
-    const pz_topology *t = layout->topology;
-    const int32_t *mirror = layout->symmetry.vertex_mirror;
-    int64_t panels = result->panel_count;
-    int64_t *votes = malloc((size_t)t->face_count * sizeof(int64_t) + 1);
-    if (!votes)
+    int32_t *mirror = malloc(((size_t)result->panel_count + 1) * sizeof(int32_t));
+    if (!mirror)
         return nomem(ctx);
-    int32_t count = 0;
-    for (int32_t f = 0; f < t->face_count; ++f) {
-        const int32_t *v = t->faces + 3 * f;
-        int32_t e = seg_edge_between(layout, mirror[v[0]], mirror[v[1]]);
-        for (int s = 0; e >= 0 && s < 2; ++s) {
-            int32_t h = t->edge_halfedge[2 * e + s];
-            if (h >= 0 && t->faces[pz_he_prev(h)] == mirror[v[2]]) {
-                votes[count++] = result->face_panel[f] * panels + result->face_panel[pz_he_face(h)];
-                break;
-            }
-        }
-    }
-    qsort(votes, (size_t)count, sizeof(int64_t), compare_int64);
-    int32_t best_votes = 0;
-    for (int32_t i = 0; i < count;) {
-        int32_t j = i;
-        while (j < count && votes[j] == votes[i])
-            ++j;
-        int32_t p = (int32_t)(votes[i] / panels), q = (int32_t)(votes[i] % panels);
-        if (i == 0 || votes[i] / panels != votes[i - 1] / panels)
-            best_votes = 0; /* a new panel's runs start */
-        if (j - i > best_votes) {
-            best_votes = j - i;
-            result->panels[p].mirror_panel = q;
-        }
-        i = j;
-    }
-    free(votes);
-    return PZ_OK;
+    pz_status status = seg_mirror_panels(layout, mirror, ctx);
+    for (int32_t p = 0; p < result->panel_count; ++p)
+        result->panels[p].mirror_panel = status ? -1 : mirror[p];
+    free(mirror);
+    return status;
 }
 
 /* RMS distance of the cut edges' mirrored midpoints to the nearest cut-edge midpoint. Over at most
@@ -306,7 +254,7 @@ static pz_status fill_result(seg_layout *layout, pz_segment_result *result, pz_c
     for (int32_t p = 0; p < layout->panel_count; ++p) {
         pz_segment_panel *panel = result->panels + p;
         panel->face_count = layout->panel_offsets[p + 1] - layout->panel_offsets[p];
-        panel->goals = layout->panel_goals[p];
+        panel->copy = seg_pair_goals(layout, p, &panel->goals); /* a mirror pair is judged as one piece */
         panel->corners = panel->goals.corners;
         if (!panel->goals.failures)
             continue;
@@ -349,6 +297,7 @@ static void layout_free(seg_layout *layout)
 {
     pz_trace_graph_free(&layout->graph);
     pz_symmetry_clear(&layout->symmetry);
+    seg_mirror_free(layout);
     free(layout->vertex_edge_offsets);
     free(layout->vertex_edges);
     free(layout->edge_cut);
@@ -431,27 +380,12 @@ static pz_status layout_init(seg_layout *layout, const pz_mesh *mesh, const pz_t
     return build_vertex_edges(layout, ctx);
 }
 
-/*
- * The plane, from the options. A detected (AUTO) plane is dropped when its
- * residual exceeds MAX_AUTO_RESIDUAL_EDGES mean edges: mirror images of paths
- * go through the nearest-vertex map, and farther off they land on other
- * edges than the mirrored geometry (the shirt front of ../shared/data at 0.5
- * mean edge got a fragmented layout that missed the goals; without the plane
- * it meets them).
- */
+/* The plane, from the options (pz_symmetry_detect: AUTO uses it when the garment lies within 1.5 % of its
+ * bounding-box diagonal of its mirror image; a given axis or plane is always used). */
 static pz_status detect_symmetry(seg_layout *layout, pz_ctx *ctx)
 {
-    pz_symmetry_mode mode = layout->options->symmetry;
-    pz_status status = pz_symmetry_detect(layout->mesh, layout->topology, mode, 0, &layout->symmetry, ctx);
-    if (!status && mode == PZ_SYMMETRY_AUTO && layout->symmetry.found &&
-        layout->symmetry.residual_mm > MAX_AUTO_RESIDUAL_EDGES * layout->mean_edge) {
-        double residual_mm = layout->symmetry.residual_mm, residual_rel = layout->symmetry.residual_rel;
-        pz_symmetry_clear(&layout->symmetry);
-        layout->symmetry.axis = -1;
-        layout->symmetry.residual_mm = residual_mm; /* kept for the report: why no plane */
-        layout->symmetry.residual_rel = residual_rel;
-    }
-    return status;
+    return pz_symmetry_detect(layout->mesh, layout->topology, layout->options->symmetry, layout->options->symmetry_plane,
+                              0, &layout->symmetry, ctx);
 }
 
 pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field,
@@ -487,6 +421,8 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
         status = seg_insert_sketches(&layout, ctx);
     if (!status)
         status = seg_insert_seeds(&layout, ctx);
+    if (!status) /* after the sketches and seeds: an edge of theirs on the plane stays theirs, never removed */
+        status = seg_plane_cut(&layout, ctx);
     if (!status)
         status = seg_label_panels(&layout, ctx);
     if (!status) {

@@ -9,8 +9,12 @@
  * Removal: in reverse insertion order (a segment's order is the latest
  * inserted path among its edges), sketched segments never, the segments on
  * the symmetry plane last (Sec. 4.2, "Symmetry"), each segment is uncut
- * together with its mirror image; the removal is kept when every panel it
- * touches still meets the goals. Neither a removal nor a dart is tried next
+ * together with its mirror image (the stretch of its mirror segment between
+ * the images of its vertices: mirror_edges; a segment of half 1 that is the
+ * image of one of half 0 is not tried on its own, and a stub of a few edges
+ * the two sides' different junctions leave goes with it); the removal is
+ * kept when every panel it touches still meets the goals (a mirror pair
+ * judged as one piece: seg_panel_failures). Neither a removal nor a dart is tried next
  * to a panel that already fails on strain or injectivity (re-gluing only
  * adds faces to it). A removal that would leave a cut ending
  * inside a panel (a T-junction stub) is skipped: such partial seams are the
@@ -40,6 +44,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "segment/internal.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -178,30 +183,195 @@ void seg_segments_clear(seg_segments *segments)
 
 /* ---------------------------------------------------------------- edit sets */
 
+/* ---------------------------------------------------------------- mirror segments */
+
+/*
+ * The mirror image of a segment: the segment the mirror images of its
+ * vertices (vertex_mirror) touch most, each image voting for the segments of
+ * the cut edges at it, at least half of the segment's vertices agreeing.
+ * Segment-level rather than edge by edge: on a garment that is only nearly
+ * symmetric the images of an edge's two ends are often not neighbours (the
+ * mirrored path closed that gap with other edges), so an edge-wise map misses
+ * part of the mirror seam, and uncutting the rest would leave a stub.
+ */
+typedef struct mirror_map {
+    const seg_segments *segments;
+    int32_t *edge_segment;   /* edge_count: the segment of each cut edge (-1 uncut) */
+    int32_t *votes;          /* segment count: zero between calls */
+    int32_t *touched;        /* segment count: the segments voted for in one call */
+    int32_t *mirror;         /* segment count: the mirror segment, -2 not yet known */
+    uint8_t *claimed;        /* segment count: 1 for a segment of half 1 that is the image of one of half 0 */
+} mirror_map;
+
+static void mirror_map_free(mirror_map *map)
+{
+    free(map->edge_segment), free(map->votes), free(map->touched), free(map->mirror), free(map->claimed);
+    memset(map, 0, sizeof *map);
+}
+
+static int32_t mirror_segment(const seg_layout *layout, mirror_map *map, int32_t index);
+
+/* The half a segment lies in (segment/mirror.c): the one most of its edges lie inside; 2 on the plane cut,
+ * -1 without halves. */
+static int segment_half(const seg_layout *layout, const seg_segment *s)
+{
+    if (!layout->face_half)
+        return -1;
+    const pz_topology *t = layout->topology;
+    int32_t inside[2] = {0, 0};
+    for (int32_t i = 0; i < s->edge_count; ++i) {
+        int32_t a = t->edge_halfedge[2 * s->edges[i]], b = t->edge_halfedge[2 * s->edges[i] + 1];
+        uint8_t half = layout->face_half[pz_he_face(a)];
+        if (b < 0 || layout->face_half[pz_he_face(b)] == half)
+            ++inside[half];
+    }
+    return inside[0] + inside[1] == 0 ? 2 : inside[1] > inside[0];
+}
+
+/* 0 when out of memory. Without a plane the map is empty (every segment without a mirror). */
+static int mirror_map_build(const seg_layout *layout, const seg_segments *segments, mirror_map *map)
+{
+    memset(map, 0, sizeof *map);
+    map->segments = segments;
+    if (!layout->symmetry.found)
+        return 1;
+    size_t count = (size_t)segments->count + 1;
+    map->edge_segment = malloc(((size_t)layout->topology->edge_count + 1) * sizeof(int32_t));
+    map->votes = calloc(count, sizeof(int32_t));
+    map->touched = malloc(count * sizeof(int32_t));
+    map->mirror = malloc(count * sizeof(int32_t));
+    map->claimed = calloc(count, 1);
+    if (!map->edge_segment || !map->votes || !map->touched || !map->mirror || !map->claimed) {
+        mirror_map_free(map);
+        return 0;
+    }
+    memset(map->edge_segment, 0xff, (size_t)layout->topology->edge_count * sizeof(int32_t));
+    for (int32_t i = 0; i < segments->count; ++i) {
+        map->mirror[i] = -2;
+        for (int32_t k = 0; k < segments->items[i].edge_count; ++k)
+            map->edge_segment[segments->items[i].edges[k]] = i;
+    }
+    /* The layout is made on half 0: a segment there decides for its image on half 1, which is not tried on its
+     * own (the two sides' segments need not match one to one, so trying both could uncut one side alone). */
+    for (int32_t i = 0; i < segments->count; ++i) {
+        if (segment_half(layout, segments->items + i) != 0)
+            continue;
+        int32_t m = mirror_segment(layout, map, i);
+        if (m >= 0 && segment_half(layout, segments->items + m) == 1)
+            map->claimed[m] = 1;
+    }
+    return 1;
+}
+
+/* The mirror segment of segment `index` by the votes of its vertices' images (-1 none). */
+static int32_t vote_mirror(const seg_layout *layout, mirror_map *map, int32_t index)
+{
+    const seg_segment *s = map->segments->items + index;
+    const int32_t *vertex_mirror = layout->symmetry.vertex_mirror;
+    int32_t touched = 0, n = s->closed ? s->edge_count : s->edge_count + 1;
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t w = vertex_mirror[s->vertices[i]];
+        if (w < 0)
+            continue;
+        int32_t voted[16], voted_count = 0; /* a vertex votes once per segment, though two of its edges lie on it */
+        for (int32_t j = layout->vertex_edge_offsets[w]; j < layout->vertex_edge_offsets[w + 1]; ++j) {
+            int32_t other = map->edge_segment[layout->vertex_edges[j]];
+            int seen = other < 0;
+            for (int32_t k = 0; k < voted_count && !seen; ++k)
+                seen = voted[k] == other;
+            if (seen || voted_count == 16)
+                continue;
+            voted[voted_count++] = other;
+            if (map->votes[other]++ == 0)
+                map->touched[touched++] = other;
+        }
+    }
+    int32_t best = -1, best_votes = 0;
+    for (int32_t k = 0; k < touched; ++k) {
+        int32_t other = map->touched[k];
+        if (map->votes[other] > best_votes || (map->votes[other] == best_votes && other < best))
+            best = other, best_votes = map->votes[other];
+    }
+    for (int32_t k = 0; k < touched; ++k)
+        map->votes[map->touched[k]] = 0;
+    return 2 * best_votes >= n ? best : -1;
+}
+
+/* The mirror segment of segment `index` (itself for a segment that is its own image), -1 none; computed once. */
+static int32_t mirror_segment(const seg_layout *layout, mirror_map *map, int32_t index)
+{
+    if (!map->mirror)
+        return -1;
+    if (map->mirror[index] == -2)
+        map->mirror[index] = vote_mirror(layout, map, index);
+    return map->mirror[index];
+}
+
+/*
+ * The mirror image of edges[0..n-1] (segment `index`, or a part of it) into
+ * out (room for the mirror segment's edge count): the stretch of the mirror
+ * segment between the first and the last of its vertices that are images
+ * of the part's vertices. The two sides' segments need not match one to one
+ * (a junction an edge off on one side splits a segment there and not on the
+ * other): a segment whose image is part of a longer one takes that part
+ * only. Returns the count.
+ */
+static int32_t mirror_edges(const seg_layout *layout, mirror_map *map, int32_t index, const int32_t *edges,
+                            int32_t n, int32_t *out)
+{
+    int32_t m = mirror_segment(layout, map, index);
+    if (m < 0 || m == index)
+        return 0;
+    const seg_segment *image = map->segments->items + m;
+    const pz_topology *t = layout->topology;
+    int32_t first = image->edge_count + 1, last = -1;
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t h = t->edge_halfedge[2 * edges[i]];
+        int32_t ends[2] = {pz_he_from(t, h), pz_he_to(t, h)};
+        for (int k = 0; k < 2; ++k) {
+            int32_t w = layout->symmetry.vertex_mirror[ends[k]];
+            for (int32_t j = 0; w >= 0 && j <= image->edge_count; ++j)
+                if (image->vertices[j] == w) {
+                    first = j < first ? j : first;
+                    last = j > last ? j : last;
+                }
+        }
+    }
+    if (last <= first)
+        return 0;
+    memcpy(out, image->edges + first, (size_t)(last - first) * sizeof(int32_t));
+    return last - first;
+}
+
 /* A set of edges changed together (a segment or part of it, plus its mirror image). */
 typedef struct edge_set {
     int32_t count;
     int32_t *edges;
 } edge_set;
 
-/* edges[0..n-1] and, with symmetry, their mirror images that are cut and not sketched. */
-static int edge_set_make(const seg_layout *layout, const int32_t *edges, int32_t n, edge_set *out)
+/* edges[0..n-1] (segment `index` or a part of it from one end) and, with symmetry, their mirror image's edges
+ * that are cut and not sketched. */
+static int edge_set_make(const seg_layout *layout, mirror_map *map, int32_t index, const int32_t *edges, int32_t n,
+                         edge_set *out)
 {
+    int32_t m = mirror_segment(layout, map, index);
+    int32_t mirror_count = m >= 0 ? map->segments->items[m].edge_count : 0;
     out->count = 0;
-    out->edges = malloc((size_t)2 * n * sizeof(int32_t) + 1);
+    out->edges = malloc(((size_t)n + mirror_count) * sizeof(int32_t) + 1);
     if (!out->edges)
         return 0;
     for (int32_t i = 0; i < n; ++i)
         out->edges[out->count++] = edges[i];
-    for (int32_t i = 0; i < n; ++i) {
-        int32_t m = seg_mirror_edge(layout, edges[i]);
-        if (m < 0 || !layout->edge_cut[m] || (layout->edge_owner[m] >= 0 && layout->paths[layout->edge_owner[m]].sketch))
+    int32_t found = mirror_edges(layout, map, index, edges, n, out->edges + n);
+    for (int32_t i = 0; i < found; ++i) {
+        int32_t e = out->edges[n + i];
+        if (!layout->edge_cut[e] || (layout->edge_owner[e] >= 0 && layout->paths[layout->edge_owner[e]].sketch))
             continue;
         int seen = 0;
-        for (int32_t j = 0; j < out->count && !seen; ++j)
-            seen = out->edges[j] == m;
+        for (int32_t j = 0; j < n && !seen; ++j)
+            seen = out->edges[j] == e;
         if (!seen)
-            out->edges[out->count++] = m;
+            out->edges[out->count++] = e;
     }
     return 1;
 }
@@ -231,6 +401,72 @@ static int leaves_stub(seg_layout *layout, const edge_set *set)
     return stub;
 }
 
+/* The stubs a symmetric removal may take along: at most this many edges. */
+#define MIRROR_STUB_EDGES 3
+
+static int32_t other_cut_edge(const seg_layout *layout, int32_t v, int32_t not_e)
+{
+    for (int32_t i = layout->vertex_edge_offsets[v]; i < layout->vertex_edge_offsets[v + 1]; ++i) {
+        int32_t e = layout->vertex_edges[i];
+        if (layout->edge_cut[e] && e != not_e)
+            return e;
+    }
+    return -1;
+}
+
+static int removable_edge(const seg_layout *layout, int32_t e)
+{
+    return layout->edge_owner[e] < 0 || !layout->paths[layout->edge_owner[e]].sketch;
+}
+
+/*
+ * With halves (segment/mirror.c), the sides' junctions need not match one to
+ * one: a mirrored path may meet another an edge or two beyond where the
+ * original meets its partner, so uncutting a segment and its image can leave
+ * a stub of a few edges on one side where the other has none. Such stubs (at
+ * most MIRROR_STUB_EDGES edges, no sketch) go with the set rather than block
+ * the removal. Returns 0 when out of memory.
+ */
+static int take_mirror_stubs(seg_layout *layout, edge_set *set)
+{
+    if (!layout->face_half)
+        return 1;
+    const pz_topology *t = layout->topology;
+    int labels_valid = layout->labels_valid;
+    int ok = 1;
+    edge_set_apply(layout, set, 0);
+    for (int32_t i = 0; i < set->count && ok; ++i) {
+        int32_t h = t->edge_halfedge[2 * set->edges[i]];
+        int32_t ends[2] = {pz_he_from(t, h), pz_he_to(t, h)};
+        for (int k = 0; k < 2 && ok; ++k) {
+            int32_t v = ends[k];
+            if (t->vertex_on_boundary[v] || seg_cut_degree(layout, v) != 1)
+                continue;
+            int32_t chain[MIRROR_STUB_EDGES + 1], length = 0, e = other_cut_edge(layout, v, -1);
+            while (e >= 0 && length <= MIRROR_STUB_EDGES && removable_edge(layout, e)) {
+                chain[length++] = e;
+                v = other_end(layout, e, v);
+                if (t->vertex_on_boundary[v] || seg_cut_degree(layout, v) != 2)
+                    break; /* a node: the stub ends here */
+                e = other_cut_edge(layout, v, e);
+            }
+            if (length == 0 || length > MIRROR_STUB_EDGES || !removable_edge(layout, chain[length - 1]))
+                continue;
+            int32_t *grown = realloc(set->edges, ((size_t)set->count + length) * sizeof(int32_t));
+            if (!(ok = grown != NULL))
+                break;
+            set->edges = grown;
+            for (int32_t j = 0; j < length; ++j) {
+                set->edges[set->count++] = chain[j];
+                layout->edge_cut[chain[j]] = 0;
+            }
+        }
+    }
+    edge_set_apply(layout, set, 1);
+    layout->labels_valid = labels_valid;
+    return ok;
+}
+
 /* Relabels and evaluates the panels next to the set's edges; *ok = 1 when none fails a goal in `mask`. */
 static pz_status panels_pass(seg_layout *layout, const edge_set *set, unsigned mask, int *ok, pz_ctx *ctx)
 {
@@ -248,10 +484,15 @@ static pz_status panels_pass(seg_layout *layout, const edge_set *set, unsigned m
             if (h >= 0)
                 want[layout->face_panel[pz_he_face(h)]] = 1;
         }
+    for (int32_t p = 0; p < layout->panel_count; ++p) { /* a pair is judged together: both evaluated */
+        int32_t q = want[p] == 1 ? seg_panel_partner(layout, p) : -1;
+        if (q >= 0 && !want[q])
+            want[q] = 2;
+    }
     status = seg_evaluate_panels(layout, want, ctx);
     *ok = !status;
     for (int32_t p = 0; p < layout->panel_count && *ok; ++p)
-        if (want[p] && (layout->panel_goals[p].failures & mask))
+        if (want[p] && (seg_panel_failures(layout, p) & mask))
             *ok = 0;
     free(want);
     return status;
@@ -276,12 +517,16 @@ static pz_status worth_trying(seg_layout *layout, const edge_set *set, int *wort
 
 /* ---------------------------------------------------------------- removal */
 
+/* 1 for a segment of the cut between the two halves (segment/mirror.c), or, without halves, one lying on the
+ * plane. */
 static int on_plane(const seg_layout *layout, const seg_segment *s)
 {
     if (!layout->symmetry.found)
         return 0;
-    for (int32_t i = 0; i <= s->edge_count; ++i)
-        if (layout->symmetry.vertex_side[s->vertices[i]] != 1)
+    for (int32_t i = 0; i < s->edge_count; ++i)
+        if (layout->edge_plane ? !layout->edge_plane[s->edges[i]]
+                               : layout->symmetry.vertex_side[s->vertices[i]] != 1 ||
+                                     layout->symmetry.vertex_side[s->vertices[i + 1]] != 1)
             return 0;
     return 1;
 }
@@ -311,15 +556,19 @@ static int all_cut(const seg_layout *layout, const seg_segment *s)
     return 1;
 }
 
-/* Tries to uncut segment s (with its mirror); *removed = 1 when kept uncut. */
-static pz_status try_remove(seg_layout *layout, const seg_segment *s, int *removed, pz_ctx *ctx)
+/* Tries to uncut segment `index` (with its mirror); *removed = 1 when kept uncut. */
+static pz_status try_remove(seg_layout *layout, mirror_map *map, int32_t index, int *removed, pz_ctx *ctx)
 {
     *removed = 0;
+    const seg_segment *s = map->segments->items + index;
     edge_set set;
-    if (!edge_set_make(layout, s->edges, s->edge_count, &set))
+    if (!edge_set_make(layout, map, index, s->edges, s->edge_count, &set) || !take_mirror_stubs(layout, &set)) {
+        free(set.edges);
         return nomem(ctx);
+    }
     int worth = 0;
-    pz_status status = leaves_stub(layout, &set) ? PZ_OK : worth_trying(layout, &set, &worth, ctx);
+    int stub = leaves_stub(layout, &set);
+    pz_status status = stub ? PZ_OK : worth_trying(layout, &set, &worth, ctx);
     if (!status && worth) {
         int ok = 0;
         edge_set_apply(layout, &set, 0);
@@ -343,7 +592,9 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
         if ((status = seg_segments_build(layout, &segments, ctx)))
             break;
         removal_order *order = malloc(((size_t)segments.count + 1) * sizeof *order);
-        if (!order) {
+        mirror_map map;
+        if (!order || !mirror_map_build(layout, &segments, &map)) {
+            free(order);
             seg_segments_clear(&segments);
             return nomem(ctx);
         }
@@ -355,18 +606,19 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
         int32_t before = *removed;
         for (int32_t i = 0; i < segments.count && !status; ++i) {
             const seg_segment *s = segments.items + order[i].segment;
-            if (s->sketch || !all_cut(layout, s))
+            if (s->sketch || !all_cut(layout, s) || (map.claimed && map.claimed[order[i].segment]))
                 continue;
             if ((status = pz_check_cancel(ctx, "segment")))
                 break;
             int done = 0;
-            status = try_remove(layout, s, &done, ctx);
+            status = try_remove(layout, &map, order[i].segment, &done, ctx);
             if (done) {
                 ++*removed;
                 seg_progress(layout, "remove", ctx);
             }
         }
         free(order);
+        mirror_map_free(&map);
         seg_segments_clear(&segments);
         if (*removed == before)
             break;
@@ -463,8 +715,9 @@ static double edges_length(const seg_layout *layout, const int32_t *edges, int32
 }
 
 /* A segment can become a dart when it is open, long enough and neither end is a tip already. */
-static int dart_candidate(const seg_layout *layout, const seg_segment *s)
+static int dart_candidate(const seg_layout *layout, mirror_map *map, int32_t index)
 {
+    const seg_segment *s = map->segments->items + index;
     if (s->sketch || s->closed || s->edge_count < 2 * DART_MIN_PIECES || !all_cut(layout, s))
         return 0;
     const pz_topology *t = layout->topology;
@@ -478,11 +731,8 @@ static int dart_candidate(const seg_layout *layout, const seg_segment *s)
         return 0;
     /* A segment that is its own mirror image would be re-glued from both ends at once: a slit with two
      * tips, no dart. */
-    int32_t mirror = seg_mirror_edge(layout, s->edges[0]);
-    for (int32_t i = 0; mirror >= 0 && i < s->edge_count; ++i)
-        if (s->edges[i] == mirror)
-            return 0;
-    return 1;
+    return mirror_segment(layout, map, index) != index && !on_plane(layout, s) &&
+           !(map->claimed && map->claimed[index]);
 }
 
 /* The edges of segment s oriented from its end of lower angle defect (the end re-glued first). */
@@ -500,11 +750,11 @@ static void orient_from_low_end(const seg_layout *layout, const seg_segment *s, 
  * touched and puts the flags back: *ok = 1 when every such panel meets the
  * goals; *probe = the goals of the panel holding edge probe_edge.
  */
-static pz_status measure_glued(seg_layout *layout, const int32_t *edges, int32_t glued, int32_t probe_edge, int *ok,
-                               pz_goal_result *probe, pz_ctx *ctx)
+static pz_status measure_glued(seg_layout *layout, mirror_map *map, int32_t index, const int32_t *edges,
+                               int32_t glued, int32_t probe_edge, int *ok, pz_goal_result *probe, pz_ctx *ctx)
 {
     edge_set set;
-    if (!edge_set_make(layout, edges, glued, &set))
+    if (!edge_set_make(layout, map, index, edges, glued, &set))
         return nomem(ctx);
     edge_set_apply(layout, &set, 0);
     pz_status status = panels_ok(layout, &set, ok, ctx);
@@ -542,16 +792,18 @@ static int dart_hopeful(const seg_layout *layout, const pz_goal_result *full)
  * (measured: strain 0.2-0.5 there on the generated skirt). Darts longer than
  * DART_MAX_EXTENT_FRACTION of the merged panel's extent are not evaluated.
  */
-static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double *defect, int *made, pz_ctx *ctx)
+static pz_status try_dart(seg_layout *layout, mirror_map *map, int32_t index, const double *defect, int *made,
+                          pz_ctx *ctx)
 {
     *made = 0;
+    const seg_segment *s = map->segments->items + index;
     int32_t n = s->edge_count, pieces = n < DART_PIECES ? n : DART_PIECES;
     int32_t *edges = malloc((size_t)n * sizeof(int32_t));
     if (!edges)
         return nomem(ctx);
     orient_from_low_end(layout, s, defect, edges);
     edge_set whole;
-    if (!edge_set_make(layout, edges, n, &whole)) {
+    if (!edge_set_make(layout, map, index, edges, n, &whole)) {
         free(edges);
         return nomem(ctx);
     }
@@ -568,7 +820,7 @@ static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double
     pz_goal_result goals;
     memset(&goals, 0, sizeof goals);
     int ok = 0;
-    if (!status && worth && !(status = measure_glued(layout, edges, n, edges[0], &ok, &goals, ctx)))
+    if (!status && worth && !(status = measure_glued(layout, map, index, edges, n, edges[0], &ok, &goals, ctx)))
         worth = dart_hopeful(layout, &goals);
     double glued_strain = goals.max_abs_strain;  /* with the whole segment glued: the dart must lower it */
     int32_t best = 0;
@@ -576,7 +828,7 @@ static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double
         int32_t glued = (int32_t)((int64_t)k * n / pieces);
         if (edges_length(layout, edges + glued, n - glued) > max_leg)
             break; /* longer still for smaller k */
-        if ((status = measure_glued(layout, edges, glued, edges[glued], &ok, &goals, ctx)))
+        if ((status = measure_glued(layout, map, index, edges, glued, edges[glued], &ok, &goals, ctx)))
             break;
         if (ok && (goals.darts == 0 || goals.min_dart_opening_deg >= DART_MIN_OPENING_DEG) &&
             goals.max_abs_strain < glued_strain)
@@ -586,7 +838,7 @@ static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double
     }
     if (!status && best > 0) {
         edge_set set;
-        if (!edge_set_make(layout, edges, best, &set)) {
+        if (!edge_set_make(layout, map, index, edges, best, &set)) {
             status = nomem(ctx);
         } else {
             edge_set_apply(layout, &set, 0);
@@ -613,7 +865,9 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
     int32_t vertex_count = layout->topology->vertex_count;
     uint8_t *mark = calloc((size_t)vertex_count + 1, 1);
     int32_t *visited = malloc(((size_t)vertex_count + 1) * sizeof(int32_t));
-    if (!status && (!order || !mark || !visited))
+    mirror_map map;
+    memset(&map, 0, sizeof map);
+    if (!status && (!order || !mark || !visited || !mirror_map_build(layout, &segments, &map)))
         status = nomem(ctx);
     for (int32_t i = 0; !status && i < segments.count; ++i) {
         order[i].segment = i;
@@ -622,13 +876,12 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
     if (!status)
         qsort(order, (size_t)segments.count, sizeof(dart_order), compare_darts);
     for (int32_t i = 0; !status && i < segments.count; ++i) {
-        const seg_segment *s = segments.items + order[i].segment;
-        if (!dart_candidate(layout, s))
+        if (!dart_candidate(layout, &map, order[i].segment))
             continue;
         if ((status = pz_check_cancel(ctx, "segment")))
             break;
         int made = 0;
-        status = try_dart(layout, s, defect, &made, ctx);
+        status = try_dart(layout, &map, order[i].segment, defect, &made, ctx);
         if (made) {
             ++*darts;
             /* From the cache (the trial evaluated them): the progress shows their strain. */
@@ -639,6 +892,7 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
     free(order);
     free(mark);
     free(visited);
+    mirror_map_free(&map);
     seg_segments_clear(&segments);
     free(defect);
     return status;
@@ -768,14 +1022,19 @@ static pz_status best_merge(seg_layout *layout, int32_t p, edge_set *best, pz_ct
     best->edges = NULL;
     best->count = 0;
     seg_segments segments;
+    mirror_map map;
+    memset(&map, 0, sizeof map);
     pz_status status = seg_segments_build(layout, &segments, ctx);
+    if (!status && !mirror_map_build(layout, &segments, &map))
+        status = nomem(ctx);
     merge_score best_score = {0, 0, 0};
     for (int32_t i = 0; !status && i < segments.count; ++i) {
         const seg_segment *s = segments.items + i;
-        if (s->sketch || !all_cut(layout, s) || !bounds_panel(layout, s, p))
+        /* A seam on half 1 that is the image of one on half 0 goes with it (edge_set_make adds the image). */
+        if (s->sketch || !all_cut(layout, s) || !bounds_panel(layout, s, p) || (map.claimed && map.claimed[i]))
             continue;
         edge_set set;
-        if (!edge_set_make(layout, s->edges, s->edge_count, &set)) {
+        if (!edge_set_make(layout, &map, i, s->edges, s->edge_count, &set)) {
             status = nomem(ctx);
             break;
         }
@@ -796,6 +1055,7 @@ static pz_status best_merge(seg_layout *layout, int32_t p, edge_set *best, pz_ct
         if (!status)
             status = seg_label_panels(layout, ctx);
     }
+    mirror_map_free(&map);
     seg_segments_clear(&segments);
     return status;
 }

@@ -52,35 +52,61 @@ extern "C" {
 /* ------------------------------------------------------------------------ */
 
 typedef enum pz_symmetry_mode {
-    PZ_SYMMETRY_AUTO = 0,  /* detect: the best of the x, y, z planes through the centroid, if good enough */
+    PZ_SYMMETRY_AUTO = 0,  /* detect a plane in any orientation; used when its residual is within the tolerance */
     PZ_SYMMETRY_OFF = 1,
-    PZ_SYMMETRY_X = 2,     /* the plane x = c (normal along x) */
+    PZ_SYMMETRY_X = 2,     /* a plane x = c (normal along x), c fitted */
     PZ_SYMMETRY_Y = 3,
-    PZ_SYMMETRY_Z = 4
+    PZ_SYMMETRY_Z = 4,
+    PZ_SYMMETRY_PLANE = 5  /* the plane given (pz_symmetry_detect's plane, pz_segment_options.symmetry_plane) */
 } pz_symmetry_mode;
 
 typedef struct pz_symmetry {
     int found;                 /* 1: a plane is in use */
-    int axis;                  /* 0, 1, 2: the plane's normal axis; -1 none */
-    double normal[3], offset;  /* plane: dot(normal, p) = offset */
-    double residual_mm;        /* RMS distance of the mirrored vertices to the surface's nearest vertex */
-    double residual_rel;       /* residual_mm / bounding-box diagonal */
+    int axis;                  /* 0, 1, 2: the normal is that coordinate axis; -1 an oblique plane, or none */
+    double normal[3], offset;  /* plane: dot(normal, p) = offset (normal unit) */
+    /* How far the garment is from its mirror image: every vertex in use mirrored through the plane,
+     * its distance to the surface (the closest point on the faces around its nearest vertex), and each
+     * border vertex's distance to the border. */
+    double residual_mm;        /* the larger 90th percentile of the two (robust: a draped garment is only
+                                  nearly symmetric, and its meshing is not symmetric at all) */
+    double residual_rel;       /* residual_mm / bounding-box diagonal: AUTO's acceptance figure */
+    double rms_mm;             /* their RMS */
     int32_t vertex_count;
     int32_t *vertex_mirror;    /* vertex_count: the vertex nearest to each vertex's mirror image (-1 none) */
     uint8_t *vertex_side;      /* vertex_count: 0 on the negative side, 1 on the plane (within tolerance), 2 positive */
+    int32_t face_count;
+    int32_t *face_mirror;      /* face_count: the face holding the point closest to each face's mirrored
+                                  centroid (-1 none) */
 } pz_symmetry;
 
 /**
- * Finds the mirror plane: with PZ_SYMMETRY_AUTO the x, y and z planes through
- * the area centroid are tried and the one with the smallest residual wins if
- * residual_rel is below tolerance_rel (0 = 0.005); otherwise found = 0. A
- * given axis is used whatever its residual (found = 1, residual reported).
- * Nearest vertices through a uniform grid: O(V) expected. PZ_OFF: found = 0.
+ * Finds the mirror plane (docs/segment.md, "Symmetry").
+ * PZ_SYMMETRY_AUTO: candidate normals are the x, y and z axes and the
+ * principal axes of the area-weighted vertices (with more directions in the
+ * plane of two nearly equal principal axes), each plane through the area
+ * centroid refined by an ICP-like fit (mirror, match the closest surface
+ * points, refit the plane to the nearest 80 % of the pairs); the plane of
+ * smallest residual (residual_mm: 90th percentiles of the mirrored vertices'
+ * distances to the surface and of the border's to the border) wins, snapped to a coordinate axis within 1 degree when that
+ * fits as well, and is used (found = 1) when residual_rel is below
+ * tolerance_rel (0 = 0.015); otherwise found = 0 with the best residual kept.
+ * PZ_SYMMETRY_X/Y/Z: the plane normal to that axis, its offset fitted, used
+ * whatever its residual. PZ_SYMMETRY_PLANE: `plane` (nx, ny, nz, d: the plane
+ * n . p = d, n need not be unit) as given, used whatever its residual
+ * (PZ_ERR_USAGE when n is zero or not finite). PZ_OFF: found = 0.
+ * plane may be NULL except with PZ_SYMMETRY_PLANE. Closest points through a
+ * uniform vertex grid; the fits use at most 2000 vertices: O(V + F) expected.
  * Caller frees with pz_symmetry_clear.
  */
 pz_status pz_symmetry_detect(const pz_mesh *mesh, const pz_topology *topology, pz_symmetry_mode mode,
-                             double tolerance_rel, pz_symmetry *out, pz_ctx *ctx);
+                             const double plane[4], double tolerance_rel, pz_symmetry *out, pz_ctx *ctx);
 void pz_symmetry_clear(pz_symmetry *symmetry);
+/** Copies a symmetry (its arrays too) into *out; PZ_ERR_NOMEM. Free *out with pz_symmetry_clear. */
+pz_status pz_symmetry_copy(const pz_symmetry *symmetry, pz_symmetry *out, pz_ctx *ctx);
+/** p mirrored through the plane into out (may alias p). */
+void pz_symmetry_reflect_point(const pz_symmetry *symmetry, const double p[3], double out[3]);
+/** A direction mirrored through the plane (its normal component negated) into out (may alias d). */
+void pz_symmetry_reflect_direction(const pz_symmetry *symmetry, const double d[3], double out[3]);
 
 /**
  * The mirror image of a path through vertex_mirror: every vertex mirrored,
@@ -216,6 +242,7 @@ typedef struct pz_segment_options {
      * defaults): a split that would cut a piece narrower or smaller is never made. */
     double min_piece_width_mm, min_piece_area, max_piece_width_mm, min_dart_intake_mm;
     pz_symmetry_mode symmetry;   /* default AUTO */
+    double symmetry_plane[4];    /* PZ_SYMMETRY_PLANE: nx, ny, nz, d (n . p = d, millimetres) */
     int darts;                   /* 1: insert darts (default), 0: none */
     double grain[3];             /* 3D warp axis (unit); pz_segment_options_default: +z */
     const pz_sketch *sketch;     /* curves that become seams never removed, or NULL */
@@ -285,6 +312,8 @@ typedef struct pz_segment_panel {
     int32_t corners;
     int32_t darts;
     int32_t mirror_panel;        /* the panel that is its mirror image, itself when it straddles the plane, -1 */
+    int copy;                    /* 1: the mirror image of mirror_panel on the half the layout was not made on:
+                                    one pattern piece with it (its goals and corners are the pair's) */
     pz_goal_result goals;        /* at the final layout */
 } pz_segment_panel;
 
@@ -315,10 +344,13 @@ typedef struct pz_segment_result {
  * cross-field (field->directions). The run always ends: when the goals cannot
  * be met (S = 0 on a sphere, a budget exhausted), the best layout found is
  * returned with goals_met = 0 and the reasons, still PZ_OK. A closed surface
- * gets loops; several components are segmented each on its own. With
- * PZ_SYMMETRY_AUTO a detected plane whose residual exceeds 0.25 mean edges
- * is not used (result->symmetry.found = 0, its residual kept): mirrored
- * paths would land off the mirrored geometry (docs/segment.md).
+ * gets loops; several components are segmented each on its own. With a
+ * plane (found by PZ_SYMMETRY_AUTO within its tolerance, or given) the
+ * layout is made on one half and mirrored (docs/segment.md, "Symmetry"):
+ * the plane cut first and removed last, candidates traced on half 0, mirror
+ * pairs judged as one piece (pz_segment_panel.copy). pz_segment uses the
+ * plane whenever it has one; panelize run also makes the layout without it
+ * and keeps the one with fewer panels.
  * Progress goes to ctx->progress (stage "segment", a fraction of the call
  * that never decreases) as well as to options->on_progress; ctx->cancel is
  * checked between steps (each insertion, removal, dart, panel evaluation),

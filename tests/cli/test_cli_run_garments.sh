@@ -9,7 +9,11 @@
 # on the DiffAvatar T-shirt goes through the whole run with its 4 true panels,
 # each close to its true shape (tests/cli/true_pieces.py prints them).
 # Prints one table line per garment (faces, panels, darts, worst strain, worst
-# seam mismatch, seconds) for the record.
+# seam mismatch, seconds) for the record. Symmetry (docs/segment.md): the
+# T-shirt with its plane forced (x) keeps it only within max(+2, +25 %) panels of its layout without it;
+# where a run uses its plane (the wetsuit, the leggings, the dress), every
+# mirror piece it made exact is exact within 0.1 mm, and the wetsuit (exactly
+# symmetric) gets some.
 #
 # SPDX-License-Identifier: GPL-3.0-or-later
 set -u
@@ -52,8 +56,30 @@ PY
         "a sliver: a piece under 40 mm or 1 % of the area not forced by the garment" \
         "all(p['shape_forced_by_input'] or (p['width_mm'] >= 40 and p['area_share'] >= 0.01) for p in d['panels'])" \
         "a dart taking in under 6 mm" "all(x['intake_mm'] >= 6 for x in d['darts'])" \
-        "pieces without names or named alike" "len(set(p['name'] for p in d['panels'])) == len(d['panels'])"
+        "pieces without names or named alike" "len(set(p['name'] for p in d['panels'])) == len(d['panels'])" \
+        "a mirror piece made exact is not (0.1 mm)" \
+        "sum(1 for p in d['panels'] if 0 <= p['mirror_residual_mm'] < 0.1) >= d['segmentation']['symmetry']['exact_mirror_pieces']"
 done
+report_checks "run parafashion-wetsuit.obj mirrored" run-parafashion-wetsuit \
+    "the plane not used" "d['segmentation']['symmetry']['used']" \
+    "no mirror piece made exact" "d['segmentation']['symmetry']['exact_mirror_pieces'] >= 2"
+
+# Forcing a plane never multiplies the pieces (issue 14: x forced on the T-shirt once gave 6 -> 74 pieces).
+run run "$DATA/garments/diffavatar-tshirt.obj" -o tshirt-x --symmetry x --outputs json --quiet
+expect_ok "run diffavatar-tshirt --symmetry x"
+run run "$DATA/garments/diffavatar-tshirt.obj" -o tshirt-off --symmetry off --outputs json --quiet
+expect_ok "run diffavatar-tshirt --symmetry off"
+check "run diffavatar-tshirt --symmetry x: the plane multiplied the panels" python3 -c '
+import json, sys
+forced, off = (json.load(open(f + "/report.json")) for f in sys.argv[1:3])
+sym = forced["segmentation"]["symmetry"]
+n, n_off = forced["summary"]["panel_count"], off["summary"]["panel_count"]
+print("T-shirt: --symmetry x %d panels (%d/%d with/without the plane in its layout), off %d" %
+      (n, sym["pieces_with_plane"], sym["pieces_without_plane"], n_off))
+# the mirrored layout is kept only within max(+2, +25 %) of the layout without it (docs/segment.md), and
+# never twice the panels of a run without symmetry
+ok = sym["pieces_with_plane"] <= max(sym["pieces_without_plane"] + 2, 1.25 * sym["pieces_without_plane"])
+sys.exit(0 if ok and n < 2 * n_off else 1)' tshirt-x tshirt-off
 
 run run "$DATA/garments/diffavatar-tshirt.obj" --panels uv -o tshirt-uv --quiet
 expect_ok "run --panels uv diffavatar-tshirt"

@@ -264,44 +264,61 @@ static panel_measure measure_panel(const garment *g, const pz_segment_result *re
  * layout says of it: disk or not, darts, strain (within 1e-6 of the reported
  * figure, and beyond S exactly when the strain goal failed), no flipped
  * triangle when injective, and at least as many corners as junctions.
+ * A mirror pair across the halves of a symmetric layout (docs/segment.md,
+ * "Symmetry") is one pattern piece: both panels say the failures of both,
+ * and the copy (pz_segment_panel.copy) says its partner's corners.
  * Returns the panels that meet the goals by these measures.
  */
 static int32_t check_panels(const garment *g, const pz_segment_result *result, double max_strain,
                             int32_t max_corners, const char *what)
 {
     int32_t *ids = malloc((size_t)g->mesh->face_count * sizeof(int32_t));
-    REQUIRE(ids, "out of memory");
-    int32_t meeting = 0;
+    panel_measure *measured = calloc((size_t)result->panel_count + 1, sizeof *measured);
+    REQUIRE(ids && measured, "out of memory");
     for (int32_t p = 0; p < result->panel_count; ++p) {
         int32_t count = 0;
         for (int32_t f = 0; f < g->mesh->face_count; ++f)
             if (result->face_panel[f] == p)
                 ids[count++] = f;
         REQUIRE(count > 0, "%s: panel %d is empty", what, (int)p);
+        measured[p] = measure_panel(g, result, p, ids, count, max_strain);
+    }
+    int32_t meeting = 0;
+    for (int32_t p = 0; p < result->panel_count; ++p) {
         const pz_goal_result *said = &result->panels[p].goals;
-        panel_measure m = measure_panel(g, result, p, ids, count, max_strain);
-        CHECK(m.disk == !(said->failures & PZ_GOAL_NOT_DISK), "%s: panel %d: disk %d here, failures %u", what,
-              (int)p, m.disk, said->failures);
-        if (!m.disk)
+        const panel_measure *m = &measured[p];
+        int32_t q = result->panels[p].mirror_panel; /* the partner of a pair across the halves, or p */
+        if (q < 0 || q == p || !(result->panels[p].copy || result->panels[q].copy))
+            q = p;
+        const panel_measure *n = &measured[q];
+        CHECK((m->disk && n->disk) == !(said->failures & PZ_GOAL_NOT_DISK), "%s: panel %d: disk %d here, failures %u",
+              what, (int)p, m->disk, said->failures);
+        if (!m->disk)
             continue;
-        CHECK(m.darts == said->darts, "%s: panel %d: %d darts here, %d said", what, (int)p, (int)m.darts,
+        CHECK(m->darts == said->darts, "%s: panel %d: %d darts here, %d said", what, (int)p, (int)m->darts,
               (int)said->darts);
-        if (m.slit_edges == 0)
-            CHECK(said->corners >= m.junctions, "%s: panel %d: %d corners said, %d junctions here", what, (int)p,
-                  (int)said->corners, (int)m.junctions);
+        const panel_measure *outline = result->panels[p].copy ? n : m; /* a copy's outline is its partner's */
+        if (outline->slit_edges == 0)
+            CHECK(said->corners >= outline->junctions, "%s: panel %d: %d corners said, %d junctions here", what,
+                  (int)p, (int)said->corners, (int)outline->junctions);
+        if (result->panels[p].copy)
+            CHECK(said->corners == result->panels[q].goals.corners, "%s: copy %d: %d corners, its partner %d", what,
+                  (int)p, (int)said->corners, (int)result->panels[q].goals.corners);
         int flattened = said->max_abs_strain >= 0;
         if (flattened) {
-            CHECK(fabs(m.max_abs_strain - said->max_abs_strain) < 1e-6, "%s: panel %d: strain %.9f here, %.9f said",
-                  what, (int)p, m.max_abs_strain, said->max_abs_strain);
-            CHECK((m.max_abs_strain > max_strain) == !!(said->failures & PZ_GOAL_STRAIN),
-                  "%s: panel %d: strain %g here against S %g, failures %u", what, (int)p, m.max_abs_strain,
-                  max_strain, said->failures);
+            CHECK(fabs(m->max_abs_strain - said->max_abs_strain) < 1e-6, "%s: panel %d: strain %.9f here, %.9f said",
+                  what, (int)p, m->max_abs_strain, said->max_abs_strain);
+            double pair_strain = fmax(m->max_abs_strain, n->disk ? n->max_abs_strain : 0);
+            CHECK((pair_strain > max_strain) == !!(said->failures & PZ_GOAL_STRAIN),
+                  "%s: panel %d: strain %g here (pair %g) against S %g, failures %u", what, (int)p, m->max_abs_strain,
+                  pair_strain, max_strain, said->failures);
             if (!(said->failures & PZ_GOAL_NOT_INJECTIVE))
-                CHECK(m.flipped == 0, "%s: panel %d: %d flipped triangles here", what, (int)p, (int)m.flipped);
+                CHECK(m->flipped == 0, "%s: panel %d: %d flipped triangles here", what, (int)p, (int)m->flipped);
         }
-        meeting += flattened && m.max_abs_strain <= max_strain && m.flipped == 0 && said->corners <= max_corners &&
+        meeting += flattened && m->max_abs_strain <= max_strain && m->flipped == 0 && said->corners <= max_corners &&
                    !(said->failures & PZ_GOAL_NOT_INJECTIVE);
     }
+    free(measured);
     free(ids);
     return meeting;
 }
@@ -472,8 +489,12 @@ static void test_bodice(void)
               "bodice panel %d: mirror %d is not mutual", (int)p, (int)m);
     }
     double mean_edge = pz_field_mean_edge_length(g.mesh, g.topology);
-    CHECK(base->symmetry_residual_mm >= 0 && base->symmetry_residual_mm < 0.01,
-          "bodice layout residual %.2g mm, above 0.01 mm (measured 8.4e-5; mean edge %.2f)",
+    /* The layout is made on one half and mirrored (docs/segment.md, "Symmetry"); the seam left on the plane
+     * runs along mesh edges through the faces the plane crosses (77 of the bodice's faces are their own
+     * mirror images: no edge path through them is), so the layout is its mirror image within a fraction of
+     * an edge, not exactly (measured 3.3 mm, 0.16 mean edges; the paths off the plane are exact). */
+    CHECK(base->symmetry_residual_mm >= 0 && base->symmetry_residual_mm < 0.25 * mean_edge,
+          "bodice layout residual %.2g mm, above a quarter of the mean edge %.2f mm (measured 3.3 mm)",
           base->symmetry_residual_mm, mean_edge);
 
     /* Same input, another thread count: the same layout, darts and evaluations, bit for bit. */
@@ -655,6 +676,9 @@ static void test_darts(void)
     pz_segment_options options;
     pz_segment_options_default(&options);
     pz_mesh_vertical_axis(g.mesh, options.grain);
+    /* Without its mirror plane, as panelize run lays it out: the mirrored layout (3 panels, no dart) has more
+     * panels than this one (docs/segment.md, "Symmetry"). */
+    options.symmetry = PZ_SYMMETRY_OFF;
     pz_segment_result *result = NULL;
     REQUIRE_OK(pz_segment(g.mesh, g.topology, g.field, &options, &result, &ctx), ctx);
     CHECK(result->dart_count >= 1, "the skirt got no dart");
