@@ -51,14 +51,16 @@ const char pz_cli_field_usage[] =
 
 static pz_status parse_options(const pz_cli_args *args, pz_field_options *options, pz_ctx *ctx)
 {
-    memset(options, 0, sizeof *options);
+    pz_field_options_default(options);
     options->use_poses = 1;
+    options->scale_count = PZ_FIELD_DEFAULT_SCALES;
+    options->smoothness = PZ_FIELD_DEFAULT_SMOOTHNESS;
     const char *scales = pz_cli_value(args, PZ_CLI_OPT_SCALES);
     if (scales) {
         char *end = NULL;
         errno = 0;
         long k = strtol(scales, &end, 10);
-        if (errno || end == scales || *end || k < 1 || k > PZ_FIELD_MAX_SCALES)
+        if (errno || end == scales || *end || k < INT32_MIN || k > INT32_MAX)
             return pz_error(ctx, PZ_ERR_USAGE, "field: --scales: expected an integer 1 .. %d, got '%s'",
                             PZ_FIELD_MAX_SCALES, scales);
         options->scale_count = (int32_t)k;
@@ -68,14 +70,14 @@ static pz_status parse_options(const pz_cli_args *args, pz_field_options *option
         char *end = NULL;
         errno = 0;
         double w = strtod(smoothness, &end);
-        if (errno || end == smoothness || *end || !isfinite(w) || !(w > 0.0))
+        if (errno || end == smoothness || *end)
             return pz_error(ctx, PZ_ERR_USAGE, "field: --smoothness: expected a positive number, got '%s'",
                             smoothness);
         options->smoothness = w;
     }
     if (!args->output_path)
         return pz_error(ctx, PZ_ERR_USAGE, "field: -o DIR is required");
-    return PZ_OK;
+    return pz_field_options_check(options, "field", PZ_OPTION_FLAG, ctx); /* shared with the Python package */
 }
 
 /* ---------------------------------------------------------------- report */

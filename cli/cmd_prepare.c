@@ -80,8 +80,6 @@ static pz_status parse_options(const pz_cli_args *args, pz_prepare_options *opti
         return pz_error(ctx, PZ_ERR_USAGE, "prepare: %s: cannot write this format (use .obj, .ply or .glb)",
                         args->output_path);
     const char *edge = pz_cli_value(args, PZ_CLI_OPT_EDGE);
-    if (edge && args->target_faces)
-        return pz_error(ctx, PZ_ERR_USAGE, "prepare: give --edge or --faces, not both");
     if (edge && (status = parse_length("--edge", edge, 0, &options->target_edge, ctx)))
         return status;
     options->target_faces = args->target_faces;
@@ -99,7 +97,7 @@ static pz_status parse_options(const pz_cli_args *args, pz_prepare_options *opti
         return pz_error(ctx, PZ_ERR_USAGE, "prepare: --keep: expected largest or all, got '%s'", keep);
     options->no_remesh = args->repair_flags != 0;
     options->name = args->positionals[0];
-    return PZ_OK;
+    return pz_prepare_options_check(options, "prepare", PZ_OPTION_FLAG, ctx); /* shared with the Python package */
 }
 
 /* ---------------------------------------------------------------- output */

@@ -100,9 +100,9 @@ static pz_status parse_on_off(const char *option, const char *text, int *value, 
     return parse_word(option, text, words, 2, value, ctx);
 }
 
-/* The number of option `flag` (when given) into *value: a finite number in lo..hi, else exit 64. */
-static pz_status parse_bounded(const pz_cli_args *args, uint64_t flag, const char *option, double lo, double hi,
-                               double *value, pz_ctx *ctx)
+/* The number of option `flag` (when given) into *value: a finite number, else exit 64 (its range is
+ * checked with every other option's, pz_run_options_check). */
+static pz_status parse_number(const pz_cli_args *args, uint64_t flag, const char *option, double *value, pz_ctx *ctx)
 {
     const char *text = pz_cli_value(args, flag);
     if (!text)
@@ -110,8 +110,8 @@ static pz_status parse_bounded(const pz_cli_args *args, uint64_t flag, const cha
     char *end = NULL;
     errno = 0;
     double number = strtod(text, &end);
-    if (end == text || *end || errno == ERANGE || !isfinite(number) || number < lo || number > hi)
-        return pz_error(ctx, PZ_ERR_USAGE, "run: %s: '%s' is not a number in %g..%g", option, text, lo, hi);
+    if (end == text || *end || errno == ERANGE || !isfinite(number))
+        return pz_error(ctx, PZ_ERR_USAGE, "run: %s: '%s' is not a number", option, text);
     *value = number;
     return PZ_OK;
 }
@@ -166,41 +166,26 @@ static pz_status parse_symmetry(const char *text, pz_segment_options *segment, p
  * --min-piece-area, --min-dart-intake (0 turns one off). */
 static pz_status parse_goals(const pz_cli_args *args, pz_goal_options *goals, pz_ctx *ctx)
 {
-    pz_status status = parse_bounded(args, PZ_CLI_OPT_MIN_PIECE_WIDTH, "--min-piece-width", 0, 1000,
-                                     &goals->min_piece_width_mm, ctx);
+    double corners = goals->max_corners;
+    pz_status status = parse_number(args, PZ_CLI_OPT_MIN_PIECE_WIDTH, "--min-piece-width", &goals->min_piece_width_mm,
+                                    ctx);
     if (status == PZ_OK)
-        status = parse_bounded(args, PZ_CLI_OPT_MIN_PIECE_AREA, "--min-piece-area", 0, 0.5, &goals->min_piece_area, ctx);
+        status = parse_number(args, PZ_CLI_OPT_MIN_PIECE_AREA, "--min-piece-area", &goals->min_piece_area, ctx);
     if (status == PZ_OK)
-        status = parse_bounded(args, PZ_CLI_OPT_MIN_DART_INTAKE, "--min-dart-intake", 0, 1000,
-                               &goals->min_dart_intake_mm, ctx);
-    if (status != PZ_OK)
-        return status;
-    const char *text;
-    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_CORNERS))) {
-        char *end = NULL;
-        errno = 0;
-        long corners = strtol(text, &end, 10);
-        if (end == text || *end || errno == ERANGE || corners < 1 || corners > 1000)
-            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-corners: '%s' is not a whole number in 1..1000", text);
-        goals->max_corners = (int32_t)corners;
-    }
-    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_STRAIN))) {
-        char *end = NULL;
-        errno = 0;
-        double strain = strtod(text, &end);
-        if (end == text || *end || errno == ERANGE || !isfinite(strain) || strain < 0 || strain > 10)
-            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-strain: '%s' is not a number in 0..10", text);
-        goals->max_strain = strain;
-    }
-    if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_SEAM_MISMATCH))) {
-        char *end = NULL;
-        errno = 0;
-        double mismatch = strtod(text, &end);
-        if (end == text || *end || errno == ERANGE || !isfinite(mismatch) || mismatch < 0 || mismatch > 1)
-            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-seam-mismatch: '%s' is not a number in 0..1", text);
-        goals->max_seam_mismatch = mismatch;
-    }
-    return PZ_OK;
+        status = parse_number(args, PZ_CLI_OPT_MIN_DART_INTAKE, "--min-dart-intake", &goals->min_dart_intake_mm, ctx);
+    if (status == PZ_OK)
+        status = parse_number(args, PZ_CLI_OPT_MAX_CORNERS, "--max-corners", &corners, ctx);
+    if (status == PZ_OK)
+        status = parse_number(args, PZ_CLI_OPT_MAX_STRAIN, "--max-strain", &goals->max_strain, ctx);
+    if (status == PZ_OK)
+        status = parse_number(args, PZ_CLI_OPT_MAX_SEAM_MISMATCH, "--max-seam-mismatch", &goals->max_seam_mismatch,
+                              ctx);
+    if (status == PZ_OK && corners != floor(corners))
+        status = pz_error(ctx, PZ_ERR_USAGE, "run: --max-corners: '%s' is not a whole number",
+                          pz_cli_value(args, PZ_CLI_OPT_MAX_CORNERS));
+    /* Out of int32's range: kept out of range (the check below names it) without an undefined conversion. */
+    goals->max_corners = corners > 1e6 ? 1000001 : corners < -1e6 ? -1 : (int32_t)corners;
+    return status;
 }
 
 static pz_status parse_run_options(const pz_cli_args *args, pz_run_options *options, pz_ctx *ctx)
@@ -227,6 +212,8 @@ static pz_status parse_run_options(const pz_cli_args *args, pz_run_options *opti
     }
     if (status == PZ_OK && args->positional_count > 1)
         status = pz_error(ctx, PZ_ERR_USAGE, "run: expected one GARMENT, got %d files", args->positional_count);
+    if (status == PZ_OK) /* the ranges: the library's, shared with the Python package */
+        status = pz_run_options_check(options, "run", PZ_OPTION_FLAG, ctx);
     return status;
 }
 

@@ -10,13 +10,12 @@
 #include "cli/cli.h"
 
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
-
-#define MAX_ITERATIONS 10000
 
 /* ---------------------------------------------------------------- parsing */
 
@@ -66,15 +65,11 @@ static pz_status parse_backend_options(const pz_cli_args *args, pz_flatten_optio
     return PZ_OK;
 }
 
-/* One finite number in minimum .. maximum for a length option (mm): a value beyond any garment's (an
- * allowance of 1e300) is a mistake, refused here rather than failing deep in the drawing. */
-static pz_status parse_length(const char *option, const char *text, double minimum, double maximum, double *out,
-                              pz_ctx *ctx)
+/* One finite number for a length option (mm); its range is checked with every other option's
+ * (pz_run_options_check). */
+static pz_status parse_length(const char *option, const char *text, double *out, pz_ctx *ctx)
 {
-    pz_status status = parse_numbers(option, text, out, 1, ctx);
-    if (status == PZ_OK && (*out < minimum || *out > maximum))
-        status = pz_error(ctx, PZ_ERR_USAGE, "flatten: %s: %s is not in %g .. %g mm", option, text, minimum, maximum);
-    return status;
+    return parse_numbers(option, text, out, 1, ctx);
 }
 
 /* The pattern-file options of the export stage (export/export.h). */
@@ -85,17 +80,17 @@ static pz_status parse_export_options(const pz_cli_args *args, pz_run_options *r
     pz_status status = PZ_OK;
     int hem_given = 0;
     if ((text = pz_cli_value(args, PZ_CLI_OPT_SEAM_ALLOWANCE)))
-        status = parse_length("--seam-allowance", text, 0, 100, &options->seam_allowance_mm, ctx);
+        status = parse_length("--seam-allowance", text, &options->seam_allowance_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_HEM_ALLOWANCE)))
-        status = parse_length("--hem-allowance", text, 0, 100, &options->hem_allowance_mm, ctx), hem_given = 1;
+        status = parse_length("--hem-allowance", text, &options->hem_allowance_mm, ctx), hem_given = 1;
     if (!hem_given)
         options->hem_allowance_mm = options->seam_allowance_mm;
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_NOTCH_SPACING)))
-        status = parse_length("--notch-spacing", text, 1, 10000, &options->notch_spacing_mm, ctx);
+        status = parse_length("--notch-spacing", text, &options->notch_spacing_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_FABRIC_WIDTH)))
-        status = parse_length("--fabric-width", text, 10, 10000, &options->fabric_width_mm, ctx);
+        status = parse_length("--fabric-width", text, &options->fabric_width_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_GAP)))
-        status = parse_length("--gap", text, 0, 1000, &options->gap_mm, ctx);
+        status = parse_length("--gap", text, &options->gap_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_PAPER))) {
         if (strcmp(text, "a4") != 0 && strcmp(text, "letter") != 0 && strcmp(text, "A4") != 0 &&
             strcmp(text, "Letter") != 0)
@@ -103,12 +98,8 @@ static pz_status parse_export_options(const pz_cli_args *args, pz_run_options *r
         options->paper = (text[0] == 'a' || text[0] == 'A') ? "a4" : "letter";
     }
     options->dxf_strict = pz_cli_value(args, PZ_CLI_OPT_DXF_STRICT) != NULL;
-    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SIZE))) {
-        if (!*text || strlen(text) >= sizeof ((pz_pieces *)0)->size_name)
-            return pz_error(ctx, PZ_ERR_USAGE, "%s: --size: '%s' is not a name of 1 to %d characters", args->command,
-                            text, (int)sizeof ((pz_pieces *)0)->size_name - 1);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SIZE)))
         options->size_name = text;
-    }
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_ALLOWANCES))) {
         if (!*text)
             return pz_error(ctx, PZ_ERR_USAGE, "%s: --allowances: empty file name", args->command);
@@ -134,33 +125,25 @@ static pz_status parse_flatten_options(const pz_cli_args *args, pz_flatten_optio
         char *end = NULL;
         errno = 0;
         long iterations = strtol(text, &end, 10);
-        if (end == text || *end || errno == ERANGE || iterations < 1 || iterations > MAX_ITERATIONS)
+        if (end == text || *end || errno == ERANGE || iterations < INT_MIN || iterations > INT_MAX)
             return pz_error(ctx, PZ_ERR_USAGE, "flatten: --iterations: '%s' is not a whole number in 1..%d", text,
-                            MAX_ITERATIONS);
+                            PZ_MAX_ITERATIONS);
         flatten->iterations = (int)iterations;
     }
     if ((text = pz_cli_value(args, PZ_CLI_OPT_WEIGHTS))) {
         if ((status = parse_numbers("--weights", text, flatten->weights, 4, ctx)))
             return status;
-        for (int i = 0; i < 4; ++i)
-            if (flatten->weights[i] < 0)
-                return pz_error(ctx, PZ_ERR_USAGE, "flatten: --weights: '%s': weights must not be negative", text);
     }
     if ((text = pz_cli_value(args, PZ_CLI_OPT_FABRIC))) {
         double fabric[3];
         if ((status = parse_numbers("--fabric", text, fabric, 3, ctx)))
             return status;
-        for (int i = 0; i < 3; ++i)
-            if (fabric[i] <= 0)
-                return pz_error(ctx, PZ_ERR_USAGE, "flatten: --fabric: '%s': stiffnesses must be positive", text);
         flatten->fabric = (pz_fabric){fabric[0], fabric[1], fabric[2]};
         flatten->fabric_given = 1;
     }
     if ((text = pz_cli_value(args, PZ_CLI_OPT_GRAIN))) {
         if ((status = parse_numbers("--grain", text, flatten->grain, 3, ctx)))
             return status;
-        if (flatten->grain[0] == 0 && flatten->grain[1] == 0 && flatten->grain[2] == 0)
-            return pz_error(ctx, PZ_ERR_USAGE, "flatten: --grain: '%s' is the zero vector", text);
         flatten->grain_given = 1;
     }
     return PZ_OK;
@@ -177,6 +160,8 @@ pz_status pz_cli_pipeline_options(const pz_cli_args *args, pz_run_options *optio
     pz_status status = parse_flatten_options(args, &options->flatten, ctx);
     if (status == PZ_OK)
         status = parse_export_options(args, options, ctx);
+    if (status == PZ_OK) /* the ranges: the library's, shared with the Python package */
+        status = pz_run_options_check(options, "flatten", PZ_OPTION_FLAG, ctx);
     if (status == PZ_OK) {
         unsigned outputs;
         status = pz_cli_outputs(args, &outputs, ctx);

@@ -68,7 +68,7 @@ pz_backend pz_backend_parse(const char *name);
 /** How the panels are flattened (the param stage as the pipeline drives it). */
 typedef struct pz_flatten_options {
     pz_backend backend;          /* default PZ_BACKEND_TEXTILE */
-    int iterations;              /* textile iterations, 1..10000; default 20 */
+    int iterations;              /* textile iterations, 1..PZ_MAX_ITERATIONS; default 20 */
     double weights[4];           /* textile weights: stretch, rigidity, dart, seam; default 5, 1, 5, 5 */
     pz_fabric fabric;            /* pz_fabric_default: the metrics' fabric and textile's constants */
     int fabric_given;            /* 1: springmass uses the orthotropic (warp, weft, shear) energy */
@@ -139,6 +139,45 @@ typedef struct pz_run_options {
 
 /** The defaults of every stage (each defined once, in its stage's own _default function). */
 void pz_run_options_default(pz_run_options *options);
+
+/* ------------------------------------------------------------------------ */
+/* The options a person sets, checked once for every front end              */
+/* ------------------------------------------------------------------------ */
+
+#define PZ_MAX_ITERATIONS 10000        /* the textile back-end's iterations: 1 .. this */
+
+/** How a message spells an option: "--max-strain" (the command line) or "max_strain" (a keyword argument). */
+typedef enum pz_option_style {
+    PZ_OPTION_FLAG = 0,
+    PZ_OPTION_KEYWORD
+} pz_option_style;
+
+/**
+ * The ranges of the options a person sets (the command line and the Python
+ * package both call this after filling *options from pz_run_options_default
+ * and the user's values): the goals (max-corners 1..1000, max-strain 0..10,
+ * max-seam-mismatch 0..1, min-piece-width 0..1000 mm, min-piece-area 0..0.5,
+ * min-dart-intake 0..1000 mm), the back-end (iterations 1..PZ_MAX_ITERATIONS,
+ * weights >= 0, fabric > 0, grain not zero), the pattern files
+ * (seam- and hem-allowance 0..100 mm, notch-spacing 1..10000 mm,
+ * fabric-width 10..10000 mm, gap 0..1000 mm, paper a4 or letter, size 1..31
+ * characters) and a symmetry plane's normal. PZ_ERR_USAGE
+ * "COMMAND: OPTION: problem" naming the first option out of range.
+ */
+pz_status pz_run_options_check(const pz_run_options *options, const char *command, pz_option_style style,
+                               pz_ctx *ctx);
+
+/**
+ * The field's options as a person sets them (scales 1..PZ_FIELD_MAX_SCALES,
+ * smoothness finite and positive): front ends fill PZ_FIELD_DEFAULT_SCALES
+ * and PZ_FIELD_DEFAULT_SMOOTHNESS first, so a given 0 is refused. As above.
+ */
+pz_status pz_field_options_check(const pz_field_options *options, const char *command, pz_option_style style,
+                                 pz_ctx *ctx);
+
+/** The preparation's options (edge >= 0 mm, not with faces; faces >= 0; weld finite). As above. */
+pz_status pz_prepare_options_check(const pz_prepare_options *options, const char *command, pz_option_style style,
+                                   pz_ctx *ctx);
 
 /* ------------------------------------------------------------------------ */
 /* The result                                                                */
