@@ -1,0 +1,124 @@
+# SPDX-License-Identifier: GPL-3.0-or-later
+"""run, flatten, field, prepare: round trips and properties of their results."""
+
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+
+import panelize
+
+
+def test_round_trip_matches_the_command_line(cli, bodice_file, tmp_path):
+    """load + run + write gives the pattern `panelize run` gives on the same file."""
+    mesh = panelize.load(bodice_file)
+    assert mesh.units == "mm" and mesh.vertices.dtype == np.float64 and mesh.faces.shape[1] == 3
+    result = panelize.run(mesh)
+    result.write(tmp_path / "py", outputs=("json", "dxf"))
+    subprocess.run([cli, "run", str(bodice_file), "-o", str(tmp_path / "cli"), "--quiet", "--outputs", "json"],
+                   check=True)
+    ours = json.loads((tmp_path / "py" / "report.json").read_text())
+    theirs = json.loads((tmp_path / "cli" / "report.json").read_text())
+    for key in ("panel_count", "seam_count", "dart_count", "goals_met", "max_abs_strain"):
+        assert ours["summary"][key] == theirs["summary"][key], key
+    assert ours["parameters"] == theirs["parameters"]
+    assert sorted(os.listdir(tmp_path / "py")) == [".panelize", "pattern.dxf", "report.json"]
+
+
+def test_every_face_is_labelled_and_the_pattern_is_finite(bodice, bodice_result):
+    result = bodice_result
+    m = len(result.faces)
+    assert result.face_panel.shape == (m,) and result.face_panel.dtype == np.int32
+    assert result.face_panel.min() == 0 and result.face_panel.max() == result.panel_count - 1
+    assert len(np.unique(result.face_panel)) == result.panel_count
+    assert result.pattern.shape == (m, 3, 2) and np.isfinite(result.pattern).all()
+    # the indexed pattern is the same numbers
+    assert np.array_equal(result.pattern_uv[result.pattern_faces], result.pattern)
+    # each pattern vertex is a copy of a garment vertex, on its face's corner
+    assert np.array_equal(result.pattern_vertex[result.pattern_faces], result.faces)
+    # the pattern is flat and the right size: each face's 2D area within the strain goal of its 3D area
+    corners = result.pattern
+    area_2d = 0.5 * np.abs(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]))
+    v = result.vertices[result.faces]
+    area_3d = 0.5 * np.linalg.norm(np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), axis=1)
+    assert abs(area_2d.sum() / area_3d.sum() - 1) < 0.05
+
+
+def test_goals_and_report(bodice_result):
+    result = bodice_result
+    report = result.report
+    assert report["summary"]["goals_met"] is result.goals_met is True
+    assert report["summary"]["panel_count"] == result.panel_count
+    assert report["segmentation"]["max_strain"] == 0.05 and report["segmentation"]["max_corners"] == 8
+    assert result.worst_strain <= 0.05 + 1e-9
+    assert abs(report["summary"]["max_abs_strain"] - result.worst_strain) < 1e-6
+
+
+def test_seams_are_sewn_vertex_to_vertex(bodice_result):
+    result = bodice_result
+    assert len(result.seams) == result.report["summary"]["seam_count"] > 0
+    for seam in result.seams:
+        a, b = seam["panels"]
+        assert 0 <= a < result.panel_count and 0 <= b < result.panel_count
+        # the two sides are the same garment vertices: one seam, two pieces of cloth
+        assert np.array_equal(seam["vertices_a"], seam["vertices_b"])
+        assert seam["pattern_a"].shape == seam["pattern_b"].shape == (len(seam["vertices_a"]), 2)
+        length_a = np.linalg.norm(np.diff(seam["pattern_a"], axis=0), axis=1).sum()
+        length_b = np.linalg.norm(np.diff(seam["pattern_b"], axis=0), axis=1).sum()
+        assert abs(length_a - length_b) <= 0.005 * max(length_a, length_b) + 1e-6
+    assert len(result.curves) == len(result.curve_is_dart) > 0
+    assert all(curve.shape[1] == 3 and np.isfinite(curve).all() for curve in result.curves)
+
+
+def test_options_reach_the_library(bodice):
+    result = panelize.run(bodice, max_corners=6, max_strain=0.04, symmetry="off", darts=False, seam_allowance=12)
+    segmentation = result.report["segmentation"]
+    assert segmentation["max_corners"] == 6 and segmentation["max_strain"] == 0.04
+    assert result.report["summary"]["dart_count"] == 0 and result.darts == []
+
+
+def test_flatten_the_panels_of_a_run(bodice_result):
+    """The panels run found, given back to flatten as per-face ids, give the same panels."""
+    first = bodice_result
+    again = panelize.flatten(first.vertices, first.faces, panels=first.face_panel, backend="lscm")
+    assert again.goals_met is None and again.panel_count == first.panel_count
+    assert np.array_equal(again.face_panel, first.face_panel)
+    assert np.isfinite(again.pattern).all()
+
+
+def test_field(bodice):
+    field = panelize.field(bodice, scales=2)
+    m = len(bodice.faces)
+    assert field.directions.shape == (m, 3)
+    assert np.allclose(np.linalg.norm(field.directions, axis=1), 1, atol=1e-6)
+    # each arm lies in its face's plane
+    assert np.abs(np.einsum("ij,ij->i", field.directions, field.normals)).max() < 1e-6
+    assert field.report["scales"] == 2 and field.report["singularity_count"] == len(field.singular_vertices)
+    assert abs(field.singular_indices.sum() - field.report["index_sum"]) < 1e-9
+
+
+def test_prepare_matches_the_command_line(cli, bodice_file, tmp_path):
+    prepared = panelize.prepare(panelize.load(bodice_file), faces_wanted=1000)
+    assert 500 < len(prepared.mesh.faces) < 2000
+    report = prepared.report
+    assert report["counts"]["output_faces"] == len(prepared.mesh.faces)
+    assert report["within_bound"] == (report["hausdorff_mm"] <= report["hausdorff_bound_mm"])
+    done = subprocess.run([cli, "prepare", str(bodice_file), "-o", str(tmp_path / "p.obj"), "--faces", "1000",
+                           "--json", "--quiet"], capture_output=True, text=True, check=True)
+    theirs = json.loads(done.stdout)
+    assert theirs["counts"] == report["counts"]
+    assert abs(theirs["hausdorff_mm"] - report["hausdorff_mm"]) < 1e-3
+
+
+def test_prepare_refuses_both_sizes(bodice):
+    with pytest.raises(panelize.UsageError, match="not both"):
+        panelize.prepare(bodice, faces_wanted=1000, edge=10)
+
+
+def test_docstrings():
+    for name in panelize.__all__:
+        item = getattr(panelize, name)
+        assert item.__doc__ and len(item.__doc__) > 40, name
+    assert panelize.Result.write.__doc__
