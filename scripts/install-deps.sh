@@ -17,6 +17,9 @@ packages=(
   # The measuring tools (bench/bench_layouts, ../shared/tools/seamscore.py, gtpattern.py, render.py)
   # run under /usr/bin/python3 and need these; nothing panelize builds or tests links them.
   python3-numpy python3-scipy python3-matplotlib
+  # The Python package (python/, docs/python.md): built against Debian's Python and numpy C APIs,
+  # tested under pytest; python3-distributed runs the Dask example of docs/python.md.
+  python3-dev python3-pytest python3-distributed
   clang libclang-rt-14-dev  # libFuzzer targets
 )
 

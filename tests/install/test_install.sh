@@ -11,7 +11,9 @@
 #  - tests/install/consumer.c built with `pkg-config --cflags --libs` (shared),
 #    with `pkg-config --static` against libpanelize.a, and by a CMake project
 #    with find_package(panelize) (both targets), each run and its output read;
-#  - examples/run_bodice.c (pz_run) built the same way and run.
+#  - examples/run_bodice.c (pz_run) built the same way and run;
+#  - the Python package (when the tree built it): imported from the installed
+#    site-packages alone, out of the source and build trees, and run once.
 # Skips (77) only without pkg-config or a C compiler. In a sanitizer build the
 # installed panelize.pc and CMake targets carry the sanitizer's link flags, so
 # the programs need nothing special here.
@@ -238,5 +240,28 @@ check_example() {
     fi
 }
 check_example
+
+# ------------------------------------------------------------------ the Python package (docs/python.md)
+check_python() {
+    local package
+    package=$(find "$prefix" -path '*/site-packages/panelize/__init__.py' | head -n 1)
+    if ! ls "$build_dir"/python/panelize/_panelize*.so >/dev/null 2>&1; then
+        check "the Python package is installed though the tree did not build it" [ -z "$package" ]
+        return
+    fi
+    check "no site-packages/panelize/__init__.py under the prefix" [ -n "$package" ]
+    [ -n "$package" ] || return
+    local out=$work/python.out
+    if (cd "$work" && PYTHONPATH=$(dirname "$(dirname "$package")") /usr/bin/python3 -c '
+import panelize
+assert panelize.__file__.startswith("'"$prefix"'"), panelize.__file__
+result = panelize.run(panelize.generate("bodice", faces=1500), symmetry="off")
+print("panels", result.panel_count, "goals_met", result.goals_met)' >"$out" 2>&1); then
+        check "installed package printed: $(cat "$out")" grep -qE '^panels [1-9][0-9]* goals_met (True|False)$' "$out"
+    else
+        fail "the installed Python package does not import and run: $(tail -n 5 "$out")"
+    fi
+}
+check_python
 
 finish
