@@ -20,4 +20,4 @@ fi
 package_path=$(cd "${PZ_PYTHON_PATH:-}" && pwd) || exit 1
 export PYTHONPATH="$package_path${PYTHONPATH:+:$PYTHONPATH}"
 export PYTHONDONTWRITEBYTECODE=1
-cd "$here" && exec "$python" -m pytest -q -p no:cacheprovider "$here"
+cd "$here" && exec "$python" -m pytest -q -p no:cacheprovider "$here" "$@"
