@@ -167,25 +167,14 @@ static pz_status read_correspondences(const pz_cli_args *args, flatten_inputs *i
     inputs->vertex_used = calloc((size_t)mesh->vertex_count + 1, 1);
     if (!inputs->vertex_used)
         return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory reading seams");
-    for (int32_t c = 0; c < 3 * mesh->face_count; ++c)
-        if (mesh->faces[c] >= 0 && mesh->faces[c] < mesh->vertex_count)
-            inputs->vertex_used[mesh->faces[c]] = 1;
+    pz_mesh_mark_used_vertices(mesh, inputs->vertex_used);
     /* Panel ids in the files: one per file when there are several; with one mesh the panels are known only
      * once the pipeline has found them, and it checks them then. */
     int32_t files = args->positional_count;
     pz_vertex_space space = {files, inputs->file_vertex_offset, inputs->vertex_used, files > 1 ? files : INT32_MAX};
     pz_correspondences *out = &inputs->correspondences;
-    out->seams = calloc((size_t)args->seam_path_count + 1, sizeof(pz_seam));
-    out->darts = calloc((size_t)args->dart_path_count + 1, sizeof(pz_dart));
-    if (!out->seams || !out->darts)
-        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory reading seams");
-    pz_status status = PZ_OK;
-    for (int i = 0; i < args->seam_path_count && status == PZ_OK; ++i)
-        if ((status = pz_read_seam_file(args->seam_paths[i], &space, &out->seams[i], ctx)) == PZ_OK)
-            out->seam_count = i + 1;
-    for (int i = 0; i < args->dart_path_count && status == PZ_OK; ++i)
-        if ((status = pz_read_dart_file(args->dart_paths[i], &space, &out->darts[i], ctx)) == PZ_OK)
-            out->dart_count = i + 1;
+    pz_status status = pz_read_correspondences(args->seam_paths, args->seam_path_count, args->dart_paths,
+                                               args->dart_path_count, &space, out, ctx);
     inputs->panels.seams = out->seams;
     inputs->panels.seam_count = out->seam_count;
     inputs->panels.darts = out->darts;

@@ -573,3 +573,29 @@ pz_status pz_mesh_join(pz_mesh *const *parts, const char *const *names, int32_t 
     return PZ_OK;
 }
 
+
+pz_status pz_read_correspondences(const char *const *seam_paths, int seam_count, const char *const *dart_specs,
+                                  int dart_count, const pz_vertex_space *space, pz_correspondences *out,
+                                  pz_ctx *ctx)
+{
+    memset(out, 0, sizeof *out);
+    out->seams = calloc((size_t)seam_count + 1, sizeof(pz_seam));
+    out->darts = calloc((size_t)dart_count + 1, sizeof(pz_dart));
+    if (!out->seams || !out->darts)
+        return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory reading seams");
+    pz_status status = PZ_OK;
+    for (int i = 0; i < seam_count && status == PZ_OK; ++i)
+        if ((status = pz_read_seam_file(seam_paths[i], space, &out->seams[i], ctx)) == PZ_OK)
+            out->seam_count = i + 1;
+    for (int i = 0; i < dart_count && status == PZ_OK; ++i)
+        if ((status = pz_read_dart_file(dart_specs[i], space, &out->darts[i], ctx)) == PZ_OK)
+            out->dart_count = i + 1;
+    return status;
+}
+
+void pz_mesh_mark_used_vertices(const pz_mesh *mesh, uint8_t *used)
+{
+    for (int32_t c = 0; c < 3 * mesh->face_count; ++c)
+        if (mesh->faces[c] >= 0 && mesh->faces[c] < mesh->vertex_count)
+            used[mesh->faces[c]] = 1;
+}

@@ -10,6 +10,7 @@
 #include "pipeline/pipeline.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -64,20 +65,36 @@ static pz_status all_at_least(const option_checker *checker, const char *name, c
     return PZ_OK;
 }
 
+/* A number option's range: its name, where it is in the struct, lo..hi, whole or not. */
+typedef struct option_range {
+    const char *name;
+    size_t offset;
+    double lo, hi;
+    int whole;
+} option_range;
+
+/* Every number of `ranges` (doubles in `options`) in its range. */
+static pz_status check_ranges(const option_checker *checker, const void *options, const option_range *ranges,
+                              int count)
+{
+    pz_status status = PZ_OK;
+    for (int i = 0; i < count && status == PZ_OK; ++i) {
+        double value = *(const double *)((const char *)options + ranges[i].offset);
+        status = in_range(checker, ranges[i].name, value, ranges[i].lo, ranges[i].hi, ranges[i].whole);
+    }
+    return status;
+}
+
 static pz_status check_goals(const option_checker *checker, const pz_goal_options *goals)
 {
+    static const option_range ranges[] = {
+        {"max-strain", offsetof(pz_goal_options, max_strain), 0, 10, 0},
+        {"max-seam-mismatch", offsetof(pz_goal_options, max_seam_mismatch), 0, 1, 0},
+        {"min-piece-width", offsetof(pz_goal_options, min_piece_width_mm), 0, 1000, 0},
+        {"min-piece-area", offsetof(pz_goal_options, min_piece_area), 0, 0.5, 0},
+        {"min-dart-intake", offsetof(pz_goal_options, min_dart_intake_mm), 0, 1000, 0}};
     pz_status status = in_range(checker, "max-corners", goals->max_corners, 1, 1000, 1);
-    if (status == PZ_OK)
-        status = in_range(checker, "max-strain", goals->max_strain, 0, 10, 0);
-    if (status == PZ_OK)
-        status = in_range(checker, "max-seam-mismatch", goals->max_seam_mismatch, 0, 1, 0);
-    if (status == PZ_OK)
-        status = in_range(checker, "min-piece-width", goals->min_piece_width_mm, 0, 1000, 0);
-    if (status == PZ_OK)
-        status = in_range(checker, "min-piece-area", goals->min_piece_area, 0, 0.5, 0);
-    if (status == PZ_OK)
-        status = in_range(checker, "min-dart-intake", goals->min_dart_intake_mm, 0, 1000, 0);
-    return status;
+    return status == PZ_OK ? check_ranges(checker, goals, ranges, (int)(sizeof ranges / sizeof ranges[0])) : status;
 }
 
 static pz_status check_flatten(const option_checker *checker, const pz_flatten_options *flatten)
@@ -100,15 +117,14 @@ static pz_status check_flatten(const option_checker *checker, const pz_flatten_o
 
 static pz_status check_export(const option_checker *checker, const pz_export_options *output)
 {
-    pz_status status = in_range(checker, "seam-allowance", output->seam_allowance_mm, 0, 100, 0);
+    static const option_range ranges[] = {
+        {"seam-allowance", offsetof(pz_export_options, seam_allowance_mm), 0, 100, 0},
+        {"notch-spacing", offsetof(pz_export_options, notch_spacing_mm), 1, 10000, 0},
+        {"fabric-width", offsetof(pz_export_options, fabric_width_mm), 10, 10000, 0},
+        {"gap", offsetof(pz_export_options, gap_mm), 0, 1000, 0}};
+    pz_status status = check_ranges(checker, output, ranges, (int)(sizeof ranges / sizeof ranges[0]));
     if (status == PZ_OK && !(output->hem_allowance_mm < 0)) /* < 0: the seam allowance */
         status = in_range(checker, "hem-allowance", output->hem_allowance_mm, 0, 100, 0);
-    if (status == PZ_OK)
-        status = in_range(checker, "notch-spacing", output->notch_spacing_mm, 1, 10000, 0);
-    if (status == PZ_OK)
-        status = in_range(checker, "fabric-width", output->fabric_width_mm, 10, 10000, 0);
-    if (status == PZ_OK)
-        status = in_range(checker, "gap", output->gap_mm, 0, 1000, 0);
     if (status == PZ_OK && output->paper && strcmp(output->paper, "a4") != 0 && strcmp(output->paper, "letter") != 0)
         status = refuse(checker, "paper", "not a4 or letter");
     if (status == PZ_OK && output->size_name &&

@@ -405,6 +405,19 @@ pz_status pz_read_seam_file(const char *path, const pz_vertex_space *space, pz_s
 pz_status pz_read_dart_file(const char *spec, const pz_vertex_space *space, pz_dart *dart, pz_ctx *ctx);
 
 /**
+ * Every seam file (pz_read_seam_file) and dart spec (pz_read_dart_file) in
+ * order into *out (emptied first; its arrays the caller's, freed with
+ * pz_correspondences_clear also on failure). The first failure stops and is
+ * returned.
+ */
+pz_status pz_read_correspondences(const char *const *seam_paths, int seam_count, const char *const *dart_specs,
+                                  int dart_count, const pz_vertex_space *space, pz_correspondences *out,
+                                  pz_ctx *ctx);
+
+/** Sets used[v] = 1 for every vertex a face of `mesh` names (used: vertex_count bytes, zeroed by the caller). */
+void pz_mesh_mark_used_vertices(const pz_mesh *mesh, uint8_t *used);
+
+/**
  * Joins meshes one after another without welding: label K = part K (named
  * after names[K]'s base name), so PZ_PANELS_LABELS makes part K panel K.
  * vertex_offset (count + 1) receives where each part's vertices start.

@@ -23,22 +23,24 @@ static PyObject *data_error(const char *fmt, ...)
     return pzpy_raise(PZ_ERR_DATA, &ctx);
 }
 
-PyObject *pzpy_doubles(const double *values, npy_intp rows, npy_intp cols)
+/* A new array of `type` (items of `size` bytes): 1-D of `rows` when cols is 0, else rows x cols, copied. */
+static PyObject *new_copy(const void *values, npy_intp rows, npy_intp cols, int type, size_t size)
 {
     npy_intp shape[2] = {rows, cols};
-    PyObject *array = PyArray_SimpleNew(cols ? 2 : 1, shape, NPY_FLOAT64);
+    PyObject *array = PyArray_SimpleNew(cols ? 2 : 1, shape, type);
     if (array && rows * (cols ? cols : 1) > 0)
-        memcpy(PyArray_DATA((PyArrayObject *)array), values, (size_t)(rows * (cols ? cols : 1)) * sizeof(double));
+        memcpy(PyArray_DATA((PyArrayObject *)array), values, (size_t)(rows * (cols ? cols : 1)) * size);
     return array;
+}
+
+PyObject *pzpy_doubles(const double *values, npy_intp rows, npy_intp cols)
+{
+    return new_copy(values, rows, cols, NPY_FLOAT64, sizeof(double));
 }
 
 PyObject *pzpy_ints(const int32_t *values, npy_intp rows, npy_intp cols)
 {
-    npy_intp shape[2] = {rows, cols};
-    PyObject *array = PyArray_SimpleNew(cols ? 2 : 1, shape, NPY_INT32);
-    if (array && rows * (cols ? cols : 1) > 0)
-        memcpy(PyArray_DATA((PyArrayObject *)array), values, (size_t)(rows * (cols ? cols : 1)) * sizeof(int32_t));
-    return array;
+    return new_copy(values, rows, cols, NPY_INT32, sizeof(int32_t));
 }
 
 /*

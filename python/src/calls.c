@@ -172,18 +172,9 @@ PyObject *pzpy_load(PyObject *self, PyObject *args, PyObject *kwargs)
             if (pzpy_path(PySequence_Fast_GET_ITEM(items, i), "poses", &keep, &data.pose_paths[i]) < 0)
                 goto done;
     }
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
     pzpy_job job = {run_load, &data};
-    int python_error = 0;
-    pz_status status = pzpy_run_job(&job, &ctx, Py_None, Py_None, &python_error);
-    if (python_error)
+    if (pzpy_run_job_or_raise(&job, Py_None, Py_None) < 0)
         goto done;
-    if (status != PZ_OK) {
-        pzpy_raise(status, &ctx);
-        goto done;
-    }
     mesh = pzpy_mesh_object(data.mesh, data.used);
     if (mesh && pzpy_set(mesh, "name", PyUnicode_DecodeFSDefault(data.path)) < 0)
         Py_CLEAR(mesh);
@@ -269,22 +260,13 @@ static pz_status read_correspondences(pattern_job *data, pz_ctx *ctx)
         return PZ_OK;
     const pz_mesh *mesh = data->mesh;
     int32_t offsets[2] = {0, mesh->vertex_count};
-    data->vertex_used = calloc((size_t)mesh->vertex_count + 1, 1);
-    pz_correspondences *out = &data->correspondences;
-    out->seams = calloc((size_t)data->seam_count + 1, sizeof(pz_seam));
-    out->darts = calloc((size_t)data->dart_count + 1, sizeof(pz_dart));
-    if (!data->vertex_used || !out->seams || !out->darts)
+    if (!(data->vertex_used = calloc((size_t)mesh->vertex_count + 1, 1)))
         return pz_error(ctx, PZ_ERR_NOMEM, "flatten: out of memory reading seams");
-    for (int32_t c = 0; c < 3 * mesh->face_count; ++c)
-        data->vertex_used[mesh->faces[c]] = 1;
-    pz_vertex_space space = {1, offsets, data->vertex_used, INT32_MAX};
-    pz_status status = PZ_OK;
-    for (int i = 0; i < data->seam_count && status == PZ_OK; ++i)
-        if ((status = pz_read_seam_file(data->seam_paths[i], &space, &out->seams[i], ctx)) == PZ_OK)
-            out->seam_count = i + 1;
-    for (int i = 0; i < data->dart_count && status == PZ_OK; ++i)
-        if ((status = pz_read_dart_file(data->dart_paths[i], &space, &out->darts[i], ctx)) == PZ_OK)
-            out->dart_count = i + 1;
+    pz_mesh_mark_used_vertices(mesh, data->vertex_used);
+    pz_vertex_space space = {1, offsets, data->vertex_used, INT32_MAX}; /* panels checked once found */
+    pz_correspondences *out = &data->correspondences;
+    pz_status status = pz_read_correspondences(data->seam_paths, data->seam_count, data->dart_paths,
+                                               data->dart_count, &space, out, ctx);
     data->panels.seams = out->seams;
     data->panels.seam_count = out->seam_count;
     data->panels.darts = out->darts;
@@ -376,51 +358,64 @@ static int path_list(PyObject *object, const char *name, pzpy_keep *keep, const 
     return status;
 }
 
+/* One side of a seam or dart (cut-mesh vertices): its garment vertices (int32) and pattern positions (k x 2). */
+static int side_arrays(const pz_result *r, const int32_t *side, npy_intp count, PyObject **vertices,
+                       PyObject **positions)
+{
+    npy_intp shape[2] = {count, 2};
+    *vertices = PyArray_SimpleNew(1, &count, NPY_INT32);
+    *positions = *vertices ? PyArray_SimpleNew(2, shape, NPY_FLOAT64) : NULL;
+    if (!*positions) {
+        Py_CLEAR(*vertices);
+        return -1;
+    }
+    int32_t *ids = PyArray_DATA((PyArrayObject *)*vertices);
+    double *uv = PyArray_DATA((PyArrayObject *)*positions);
+    for (npy_intp i = 0; i < count; ++i) {
+        ids[i] = r->pattern->vertex_origin[side[i]];
+        memcpy(uv + 2 * i, r->uv + 2 * (size_t)side[i], 2 * sizeof(double));
+    }
+    return 0;
+}
+
+/* A seam's or dart's dict: `head` (its own keys, a new dict) plus the two sides' arrays. */
+static PyObject *sewn_item(const pz_result *r, PyObject *head, const int32_t *side_a, const int32_t *side_b,
+                           npy_intp count)
+{
+    PyObject *va = NULL, *pa = NULL, *vb = NULL, *pb = NULL;
+    int failed = !head || side_arrays(r, side_a, count, &va, &pa) < 0 || side_arrays(r, side_b, count, &vb, &pb) < 0 ||
+                 PyDict_SetItemString(head, "vertices_a", va) < 0 || PyDict_SetItemString(head, "vertices_b", vb) < 0 ||
+                 PyDict_SetItemString(head, "pattern_a", pa) < 0 || PyDict_SetItemString(head, "pattern_b", pb) < 0;
+    Py_XDECREF(va), Py_XDECREF(pa), Py_XDECREF(vb), Py_XDECREF(pb);
+    if (failed)
+        Py_CLEAR(head);
+    return head;
+}
+
 /* The seams and darts of a pattern as lists of dicts (see the Result's doc). */
 static int set_seams_and_darts(PyObject *object, const pz_result *r)
 {
     const pz_pattern *pattern = r->pattern;
-    PyObject *seams = PyList_New(0), *darts = PyList_New(0);
+    PyObject *seams = PyList_New(pattern->seam_count), *darts = PyList_New(pattern->dart_count);
     int failed = !seams || !darts;
     for (int32_t s = 0; !failed && s < pattern->seam_count; ++s) {
         const pz_seam *seam = &pattern->seams[s];
-        npy_intp count = seam->pair_count;
-        PyObject *va = PyArray_SimpleNew(1, &count, NPY_INT32), *vb = PyArray_SimpleNew(1, &count, NPY_INT32);
-        npy_intp shape[2] = {count, 2};
-        PyObject *pa = PyArray_SimpleNew(2, shape, NPY_FLOAT64), *pb = PyArray_SimpleNew(2, shape, NPY_FLOAT64);
-        for (npy_intp i = 0; va && vb && pa && pb && i < count; ++i) {
-            ((int32_t *)PyArray_DATA((PyArrayObject *)va))[i] = pattern->vertex_origin[seam->side_a[i]];
-            ((int32_t *)PyArray_DATA((PyArrayObject *)vb))[i] = pattern->vertex_origin[seam->side_b[i]];
-            memcpy((double *)PyArray_DATA((PyArrayObject *)pa) + 2 * i, r->uv + 2 * seam->side_a[i], 2 * sizeof(double));
-            memcpy((double *)PyArray_DATA((PyArrayObject *)pb) + 2 * i, r->uv + 2 * seam->side_b[i], 2 * sizeof(double));
-        }
-        PyObject *item = va && vb && pa && pb
-                             ? Py_BuildValue("{s:(ii),s:O,s:O,s:O,s:O}", "panels", (int)seam->panel_a,
-                                             (int)seam->panel_b, "vertices_a", va, "vertices_b", vb, "pattern_a", pa,
-                                             "pattern_b", pb)
-                             : NULL;
-        failed = !item || PyList_Append(seams, item) < 0;
-        Py_XDECREF(item), Py_XDECREF(va), Py_XDECREF(vb), Py_XDECREF(pa), Py_XDECREF(pb);
+        PyObject *head = Py_BuildValue("{s:(ii)}", "panels", (int)seam->panel_a, (int)seam->panel_b);
+        PyObject *item = sewn_item(r, head, seam->side_a, seam->side_b, seam->pair_count);
+        failed = !item;
+        if (item)
+            PyList_SET_ITEM(seams, s, item);
     }
     for (int32_t d = 0; !failed && d < pattern->dart_count; ++d) {
         const pz_dart *dart = &pattern->darts[d];
-        npy_intp count = dart->pair_count;
-        PyObject *va = PyArray_SimpleNew(1, &count, NPY_INT32), *vb = PyArray_SimpleNew(1, &count, NPY_INT32);
-        npy_intp shape[2] = {count, 2};
-        PyObject *pa = PyArray_SimpleNew(2, shape, NPY_FLOAT64), *pb = PyArray_SimpleNew(2, shape, NPY_FLOAT64);
-        for (npy_intp i = 0; va && vb && pa && pb && i < count; ++i) {
-            ((int32_t *)PyArray_DATA((PyArrayObject *)va))[i] = pattern->vertex_origin[dart->leg_a[i]];
-            ((int32_t *)PyArray_DATA((PyArrayObject *)vb))[i] = pattern->vertex_origin[dart->leg_b[i]];
-            memcpy((double *)PyArray_DATA((PyArrayObject *)pa) + 2 * i, r->uv + 2 * dart->leg_a[i], 2 * sizeof(double));
-            memcpy((double *)PyArray_DATA((PyArrayObject *)pb) + 2 * i, r->uv + 2 * dart->leg_b[i], 2 * sizeof(double));
-        }
-        PyObject *tip = va && vb && pa && pb ? pzpy_doubles(r->uv + 2 * dart->tip, 2, 0) : NULL;
-        PyObject *item = tip ? Py_BuildValue("{s:i,s:i,s:O,s:O,s:O,s:O,s:O}", "panel", (int)dart->panel, "tip",
-                                             (int)pattern->vertex_origin[dart->tip], "pattern_tip", tip, "vertices_a",
-                                             va, "vertices_b", vb, "pattern_a", pa, "pattern_b", pb)
+        PyObject *tip = pzpy_doubles(r->uv + 2 * (size_t)dart->tip, 2, 0);
+        PyObject *head = tip ? Py_BuildValue("{s:i,s:i,s:N}", "panel", (int)dart->panel, "tip",
+                                             (int)pattern->vertex_origin[dart->tip], "pattern_tip", tip)
                              : NULL;
-        failed = !item || PyList_Append(darts, item) < 0;
-        Py_XDECREF(item), Py_XDECREF(tip), Py_XDECREF(va), Py_XDECREF(vb), Py_XDECREF(pa), Py_XDECREF(pb);
+        PyObject *item = sewn_item(r, head, dart->leg_a, dart->leg_b, dart->pair_count);
+        failed = !item;
+        if (item)
+            PyList_SET_ITEM(darts, d, item);
     }
     if (failed) {
         Py_XDECREF(seams);
@@ -469,15 +464,7 @@ static int set_result_attributes(PyObject *object, const pz_result *r)
     double worst = 0;
     for (int i = 0; i < r->metrics_count; ++i)
         worst = fmax(worst, r->metrics[i]->max_abs_strain);
-    PyObject *names = PyList_New(pattern->panel_count);
-    for (int32_t p = 0; names && p < pattern->panel_count; ++p) {
-        const char *name = r->panel_names ? r->panel_names[p] : NULL;
-        PyObject *item = name ? PyUnicode_DecodeUTF8(name, (Py_ssize_t)strlen(name), "replace") : Py_NewRef(Py_None);
-        if (!item)
-            Py_CLEAR(names);
-        else
-            PyList_SET_ITEM(names, p, item);
-    }
+    PyObject *names = pzpy_names(r->panel_names, pattern->panel_count);
     cJSON *report = pz_result_report(r);
     int failed = pzpy_set(object, "vertices", pzpy_doubles(r->garment->positions, r->garment->vertex_count, 3)) < 0 ||
                  pzpy_set(object, "faces", pzpy_ints(r->garment->faces, r->garment->face_count, 3)) < 0 ||
@@ -539,18 +526,9 @@ static PyObject *pattern_call(PyObject *args, PyObject *kwargs_given, int flatte
             goto done;
         data.options.sketch = data.sketch;
     }
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
     pzpy_job job = {run_pattern, &data};
-    int python_error = 0;
-    pz_status status = pzpy_run_job(&job, &ctx, progress, cancel, &python_error);
-    if (python_error)
+    if (pzpy_run_job_or_raise(&job, progress, cancel) < 0)
         goto done;
-    if (status != PZ_OK) {
-        pzpy_raise(status, &ctx);
-        goto done;
-    }
     if (!(object = pzpy_result_object(&data.result)))
         goto done;
     const pz_result *kept = pzpy_result_of(object);

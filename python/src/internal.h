@@ -138,6 +138,8 @@ const pz_result *pzpy_result_of(PyObject *result);
 void pzpy_goals_error(PyObject *result, const char *reasons);
 /** Sets attribute `name` of `object` to `value`, stealing the reference; -1 (and value released) on failure. */
 int pzpy_set(PyObject *object, const char *name, PyObject *value);
+/** A list of `count` str (None where names or names[i] is NULL). */
+PyObject *pzpy_names(char *const *names, int32_t count);
 /** A Python object from a cJSON tree (dict, list, str, int, float, bool, None). */
 PyObject *pzpy_from_json(const cJSON *item);
 

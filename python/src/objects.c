@@ -62,6 +62,20 @@ PyObject *pzpy_from_json(const cJSON *item)
     return container;
 }
 
+PyObject *pzpy_names(char *const *names, int32_t count)
+{
+    PyObject *list = PyList_New(count);
+    for (int32_t i = 0; list && i < count; ++i) {
+        const char *name = names ? names[i] : NULL;
+        PyObject *item = name ? PyUnicode_DecodeUTF8(name, (Py_ssize_t)strlen(name), "replace") : Py_NewRef(Py_None);
+        if (!item)
+            Py_CLEAR(list);
+        else
+            PyList_SET_ITEM(list, i, item);
+    }
+    return list;
+}
+
 /* ---------------------------------------------------------------- records */
 
 static void record_dealloc(PyObject *self)
@@ -144,16 +158,7 @@ PyObject *pzpy_mesh_object(const pz_mesh *mesh, pz_units units)
     failed = failed || pzpy_set(self, "poses", poses) < 0;
     failed = failed || pzpy_set(self, "labels", mesh->face_labels ? pzpy_ints(mesh->face_labels, mesh->face_count, 0)
                                                                   : Py_NewRef(Py_None)) < 0;
-    PyObject *names = failed ? NULL : PyList_New(mesh->label_count);
-    for (int32_t i = 0; names && i < mesh->label_count; ++i) {
-        const char *name = mesh->label_names ? mesh->label_names[i] : NULL;
-        PyObject *item = name ? PyUnicode_DecodeUTF8(name, (Py_ssize_t)strlen(name), "replace") : Py_NewRef(Py_None);
-        if (!item)
-            Py_CLEAR(names);
-        else
-            PyList_SET_ITEM(names, i, item);
-    }
-    failed = failed || pzpy_set(self, "label_names", names) < 0;
+    failed = failed || pzpy_set(self, "label_names", pzpy_names(mesh->label_names, mesh->label_count)) < 0;
     int has_uv = mesh->uv_count > 0 && mesh->uvs && mesh->corner_uvs;
     failed = failed || pzpy_set(self, "uv", has_uv ? pzpy_doubles(mesh->uvs, mesh->uv_count, 2) : Py_NewRef(Py_None)) < 0;
     failed = failed || pzpy_set(self, "uv_faces", has_uv ? pzpy_ints(mesh->corner_uvs, mesh->face_count, 3)
@@ -239,18 +244,12 @@ static PyObject *result_write(PyObject *self, PyObject *args, PyObject *kwargs)
         return NULL;
     }
     object->writing = 1;
-    pz_ctx ctx;
-    pz_ctx_init(&ctx);
-    ctx.quiet = 1;
     pzpy_job job = {run_write, &data};
-    int python_error = 0;
-    pz_status status = pzpy_run_job(&job, &ctx, progress, cancel, &python_error);
+    int status = pzpy_run_job_or_raise(&job, progress, cancel);
     object->writing = 0;
     pzpy_keep_clear(&keep);
-    if (python_error)
+    if (status < 0)
         return NULL;
-    if (status != PZ_OK)
-        return pzpy_raise(status, &ctx);
     Py_RETURN_NONE;
 }
 

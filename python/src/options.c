@@ -208,6 +208,12 @@ int pzpy_repair(PyObject *object, unsigned *out)
     return 0;
 }
 
+/* 0 when the library's check passed, else -1 with its UsageError raised. */
+static int checked(pz_status status, const pz_ctx *ctx)
+{
+    return status == PZ_OK ? 0 : (pzpy_raise(status, ctx), -1);
+}
+
 /* ---------------------------------------------------------------- run and flatten */
 
 /* backend and its own options (scheme for wirewarp, relax for springmass, features for wirewarp). */
@@ -385,8 +391,7 @@ int pzpy_run_options(PyObject *kwargs, int run_only, pz_run_options *options, pz
         return -1;
     pz_ctx ctx;
     pz_ctx_init(&ctx);
-    pz_status status = pz_run_options_check(options, run_only ? "run" : "flatten", PZ_OPTION_KEYWORD, &ctx);
-    return status == PZ_OK ? 0 : (pzpy_raise(status, &ctx), -1);
+    return checked(pz_run_options_check(options, run_only ? "run" : "flatten", PZ_OPTION_KEYWORD, &ctx), &ctx);
 }
 
 /* ---------------------------------------------------------------- field and prepare */
@@ -411,8 +416,7 @@ int pzpy_field_options(PyObject *kwargs, pz_field_options *options)
     options->scale_count = scales > 1e6 ? 1000001 : scales < -1e6 ? -1 : (int32_t)scales;
     pz_ctx ctx;
     pz_ctx_init(&ctx);
-    pz_status checked = pz_field_options_check(options, "field", PZ_OPTION_KEYWORD, &ctx);
-    return checked == PZ_OK ? 0 : (pzpy_raise(checked, &ctx), -1);
+    return checked(pz_field_options_check(options, "field", PZ_OPTION_KEYWORD, &ctx), &ctx);
 }
 
 int pzpy_prepare_options(PyObject *kwargs, pz_prepare_options *options, pzpy_keep *keep)
@@ -435,6 +439,5 @@ int pzpy_prepare_options(PyObject *kwargs, pz_prepare_options *options, pzpy_kee
     options->keep = index ? PZ_PREPARE_KEEP_ALL : PZ_PREPARE_KEEP_LARGEST;
     pz_ctx ctx;
     pz_ctx_init(&ctx);
-    pz_status checked = pz_prepare_options_check(options, "prepare", PZ_OPTION_KEYWORD, &ctx);
-    return checked == PZ_OK ? 0 : (pzpy_raise(checked, &ctx), -1);
+    return checked(pz_prepare_options_check(options, "prepare", PZ_OPTION_KEYWORD, &ctx), &ctx);
 }

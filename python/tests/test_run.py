@@ -122,3 +122,24 @@ def test_docstrings():
         item = getattr(panelize, name)
         assert item.__doc__ and len(item.__doc__) > 40, name
     assert panelize.Result.write.__doc__
+
+
+def test_darts_are_sewn_leg_to_leg():
+    """A quarter sphere takes a dart: its legs meet at the tip and match in length on the pattern."""
+    result = panelize.run(panelize.generate("quarter-sphere", faces=2000), symmetry="off")
+    assert len(result.darts) == result.report["summary"]["dart_count"] >= 1
+    assert result.curve_is_dart.sum() == len(result.darts)
+    for dart in result.darts:
+        assert 0 <= dart["panel"] < result.panel_count
+        # the two legs are the two sides of one cut: the same garment vertices, apart on the pattern
+        assert len(dart["vertices_a"]) == len(dart["vertices_b"]) >= 2
+        assert np.array_equal(dart["vertices_a"], dart["vertices_b"])
+        assert not np.allclose(dart["pattern_a"], dart["pattern_b"])
+        # both legs run up to the tip: their points facing each other are equally far from it
+        tip = dart["pattern_tip"]
+        to_tip_a = np.linalg.norm(dart["pattern_a"] - tip, axis=1)
+        to_tip_b = np.linalg.norm(dart["pattern_b"] - tip, axis=1)
+        assert np.allclose(to_tip_a, to_tip_b, rtol=0.02, atol=0.5)
+        length_a = np.linalg.norm(np.diff(dart["pattern_a"], axis=0), axis=1).sum()
+        length_b = np.linalg.norm(np.diff(dart["pattern_b"], axis=0), axis=1).sum()
+        assert abs(length_a - length_b) <= 0.005 * max(length_a, length_b) + 1e-6
