@@ -61,7 +61,11 @@ int pzpy_garment_from_call(PyObject *args, PyObject *kwargs, const char *functio
             PyErr_Clear(); /* a Mesh from generate has no file name */
             continue;
         }
-        int status = PyList_Append(keep->list ? keep->list : (keep->list = PyList_New(0)), value);
+        if (!keep->list && !(keep->list = PyList_New(0))) {
+            Py_DECREF(value);
+            return -1;
+        }
+        int status = PyList_Append(keep->list, value);
         Py_DECREF(value);
         if (status < 0)
             return -1;

@@ -143,3 +143,30 @@ def test_darts_are_sewn_leg_to_leg():
         length_a = np.linalg.norm(np.diff(dart["pattern_a"], axis=0), axis=1).sum()
         length_b = np.linalg.norm(np.diff(dart["pattern_b"], axis=0), axis=1).sum()
         assert abs(length_a - length_b) <= 0.005 * max(length_a, length_b) + 1e-6
+
+
+def without_timings(value):
+    if isinstance(value, dict):
+        return {k: without_timings(v) for k, v in value.items() if "timings" not in k and k != "ms"}
+    if isinstance(value, list):
+        return [without_timings(v) for v in value]
+    return value
+
+
+@pytest.mark.parametrize("function", ["run", "field"])
+def test_the_documented_defaults_are_the_librarys(function, bodice, tmp_path):
+    """Every default the signature shows, given explicitly, changes nothing (the library holds the defaults)."""
+    import inspect
+    call = getattr(panelize, function)
+    defaults = {name: parameter.default for name, parameter in inspect.signature(call).parameters.items()
+                if parameter.kind == parameter.KEYWORD_ONLY and parameter.default is not None}
+    assert len(defaults) >= (15 if function == "run" else 2)
+    implicit = call(bodice, symmetry="off") if function == "run" else call(bodice)
+    defaults.update({"symmetry": "off"} if function == "run" else {})
+    explicit = call(bodice, **defaults)
+    assert without_timings(explicit.report) == without_timings(implicit.report)
+    if function == "run":  # the pattern files show the rest: allowances, notches, marker gap, size, paper
+        for name, result in (("implicit", implicit), ("explicit", explicit)):
+            result.write(tmp_path / name, outputs="svg,dxf,marker,tiled")
+        for file in ("pattern.svg", "pattern.dxf", "marker.svg"):
+            assert (tmp_path / "implicit" / file).read_bytes() == (tmp_path / "explicit" / file).read_bytes(), file
