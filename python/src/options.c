@@ -14,6 +14,7 @@
 #include "internal.h"
 
 #include <ctype.h>
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -78,7 +79,11 @@ static int whole(PyObject *object, const char *name, double *out)
     double value = *out;
     if (number(object, name, &value) < 0)
         return -1;
-    if (object != Py_None && isfinite(value) && value != floor(value)) {
+    if (object != Py_None && !isfinite(value)) {
+        pzpy_usage_error("%s: %g is not a whole number", name, value);
+        return -1;
+    }
+    if (object != Py_None && value != floor(value)) {
         PyErr_Format(PyExc_TypeError, "%s: expected a whole number, got %R", name, object);
         return -1;
     }
@@ -105,6 +110,13 @@ static int numbers(PyObject *object, const char *name, int count, double *out, i
     if (status == 0 && given)
         *given = 1;
     return status;
+}
+
+/* A whole number as an int for the library's range check: beyond int's reach it becomes INT_MAX or
+ * INT_MIN, which every whole-number option refuses, naming it. */
+static int as_int(double value)
+{
+    return value > 1e9 ? INT_MAX : value < -1e9 ? INT_MIN : (int)value; /* the caller passes finite values */
 }
 
 /* True/False (or the CLI's words "on"/"off") into *out; None leaves it. */
@@ -254,7 +266,7 @@ static int flatten_options(PyObject *kwargs, pz_flatten_options *flatten, pzpy_k
     PyObject *value;
     if (!(value = pzpy_pop(kwargs, "iterations", keep)) || whole(value, "iterations", &iterations) < 0)
         return -1;
-    flatten->iterations = iterations > 1e9 ? 1000000000 : iterations < -1e9 ? -1 : (int)iterations;
+    flatten->iterations = as_int(iterations);
     if (!(value = pzpy_pop(kwargs, "weights", keep)) || numbers(value, "weights", 4, flatten->weights, NULL) < 0)
         return -1;
     if (!(value = pzpy_pop(kwargs, "fabric", keep)) || numbers(value, "fabric", 3, fabric, &flatten->fabric_given) < 0)
@@ -355,7 +367,7 @@ static int run_only_options(PyObject *kwargs, pz_run_options *options, pzpy_keep
     double corners = options->goals.max_corners;
     if (!(value = pzpy_pop(kwargs, "max_corners", keep)) || whole(value, "max_corners", &corners) < 0)
         return -1;
-    options->goals.max_corners = corners > 1e6 ? 1000001 : corners < -1e6 ? -1 : (int32_t)corners;
+    options->goals.max_corners = as_int(corners);
     static const char *const prepare_modes[] = {"off", "auto"};
     if (!(value = pzpy_pop(kwargs, "prepare", keep)))
         return -1;
@@ -413,7 +425,7 @@ int pzpy_field_options(PyObject *kwargs, pz_field_options *options)
     pzpy_keep_clear(&keep);
     if (status < 0)
         return -1;
-    options->scale_count = scales > 1e6 ? 1000001 : scales < -1e6 ? -1 : (int32_t)scales;
+    options->scale_count = as_int(scales);
     pz_ctx ctx;
     pz_ctx_init(&ctx);
     return checked(pz_field_options_check(options, "field", PZ_OPTION_KEYWORD, &ctx), &ctx);
@@ -426,7 +438,7 @@ int pzpy_prepare_options(PyObject *kwargs, pz_prepare_options *options, pzpy_kee
     PyObject *value;
     if (!(value = pzpy_pop(kwargs, "faces", keep)) || whole(value, "faces", &faces) < 0)
         return -1;
-    options->target_faces = faces > 1e9 ? -1 : (int32_t)faces; /* above int32: refused as negative */
+    options->target_faces = as_int(faces);
     if (!(value = pzpy_pop(kwargs, "edge", keep)) || number(value, "edge", &options->target_edge) < 0)
         return -1;
     if (!(value = pzpy_pop(kwargs, "weld", keep)) || number(value, "weld", &weld) < 0)
