@@ -11,7 +11,7 @@
  *              Python callable and turns Ctrl-C into the library's cancel flag;
  *   options.c  keyword arguments into the library's options structs (the
  *              CLI's option names, its defaults, pz_run_options_check's ranges);
- *   calls.c    load, run, flatten, field, prepare, generate;
+ *   calls.c    load, run, flatten, generate; calls_field.c: field, prepare;
  *   objects.c  the Mesh, Field, Prepared and Result types.
  *
  * Every function returning a PyObject * returns a new reference, or NULL with
