@@ -117,6 +117,8 @@ static pz_status check_tiled_size(const pz_cli_args *args, const pz_mesh *mesh, 
     unsigned outputs = 0;
     if (pz_cli_outputs(args, &outputs, ctx) != PZ_OK || !(outputs & PZ_OUTPUT_TILED_PDF))
         return PZ_OK;
+    if (args->units == PZ_UNITS_AUTO && !pz_mesh_units_plausible(mesh, PZ_UNITS_AUTO))
+        return PZ_OK; /* a guess that fits no garment: the units check says so, more plainly */
     double mm = pz_units_to_mm(args->units == PZ_UNITS_AUTO ? pz_mesh_guess_units(mesh) : args->units);
     return pz_export_check_tiled_area(pz_geom_total_area(mesh) * mm * mm, pz_cli_value(args, PZ_CLI_OPT_PAPER),
                                       args->positionals[0], ctx);
