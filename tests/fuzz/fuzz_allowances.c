@@ -14,8 +14,7 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pz_ctx ctx;
-    fuzz_ctx_init(&ctx);
-    const char *path = fuzz_file(data, size, ".txt");
+    const char *path = fuzz_begin_file(&ctx, data, size, ".txt");
     if (!path)
         return 0;
     pz_seam seams[3] = {{0, 1, 0, NULL, NULL}, {1, 2, 0, NULL, NULL}, {2, 0, 0, NULL, NULL}};

@@ -11,8 +11,7 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pz_ctx ctx;
-    fuzz_ctx_init(&ctx);
-    const char *path = fuzz_file(data, size, ".json");
+    const char *path = fuzz_begin_file(&ctx, data, size, ".json");
     pl_feature_file features;
     if (path && pl_read_features(path, 10.0, &features, &ctx) == PZ_OK)
         pl_feature_file_clear(&features);

@@ -11,8 +11,7 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pz_ctx ctx;
-    fuzz_ctx_init(&ctx);
-    const char *path = fuzz_file(data, size, ".txt");
+    const char *path = fuzz_begin_file(&ctx, data, size, ".txt");
     int32_t face_panel[16], panel_count = 0;
     if (path)
         (void)pz_read_panel_file(path, 16, face_panel, &panel_count, &ctx);

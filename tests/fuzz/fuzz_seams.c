@@ -15,8 +15,7 @@
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
     pz_ctx ctx;
-    fuzz_ctx_init(&ctx);
-    const char *path = fuzz_file(data, size, ".txt");
+    const char *path = fuzz_begin_file(&ctx, data, size, ".txt");
     if (!path)
         return 0;
     static const int32_t offsets[3] = {0, 8, 16};

@@ -73,4 +73,11 @@ static inline const char *fuzz_file(const uint8_t *data, size_t size, const char
     return fclose(file) == 0 && written == size ? path : NULL;
 }
 
+/* The start of a file reader's target: a quiet context, the bytes in the scratch file (NULL: skip the input). */
+static inline const char *fuzz_begin_file(pz_ctx *ctx, const uint8_t *data, size_t size, const char *suffix)
+{
+    fuzz_ctx_init(ctx);
+    return fuzz_file(data, size, suffix);
+}
+
 #endif
