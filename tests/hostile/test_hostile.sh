@@ -10,9 +10,11 @@
 #    before an early error) and leave nothing: no output folder or file, no
 #    hidden temporary folder, no probe, no `.tmp`;
 #  - leave its inputs untouched (the garment, the file given as -o).
+# PZ_HOSTILE_ONLY=REGEX runs only the cases whose names match.
 # SPDX-License-Identifier: GPL-3.0-or-later
-source "$(dirname "$0")/../cli/lib.sh"
-source "$(dirname "$0")/corpus.sh"
+here=$(cd "$(dirname "$0")" && pwd) # lib.sh changes into a scratch folder
+source "$here/../cli/lib.sh"
+source "$here/corpus.sh"
 limit=${PZ_HOSTILE_LIMIT:-300}
 
 if ! command -v python3 >/dev/null; then
@@ -27,6 +29,7 @@ leftovers() { find "$WORK" \( -name '*.tmp-*' -o -name '*.tmp' -o -name '*probe*
 
 while IFS= read -r line; do
     hostile_args "$line" "$WORK/out" || continue
+    [[ -n "${PZ_HOSTILE_ONLY:-}" && ! "$NAME" =~ $PZ_HOSTILE_ONLY ]] && continue
     start=$(date +%s%N)
     timeout -s KILL "$limit" "$BIN" "$COMMAND" "${ARGS[@]}" >"$WORK/stdout" 2>"$WORK/err" </dev/null
     rc=$?
