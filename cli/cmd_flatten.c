@@ -111,6 +111,19 @@ static void flatten_inputs_clear(flatten_inputs *inputs)
     memset(inputs, 0, sizeof *inputs);
 }
 
+/* A garment too large for pattern-tiled.pdf (when it is asked for) is refused before the computation. */
+static pz_status check_tiled_size(const pz_cli_args *args, const pz_mesh *mesh, pz_ctx *ctx)
+{
+    unsigned outputs = 0;
+    if (pz_cli_outputs(args, &outputs, ctx) != PZ_OK || !(outputs & PZ_OUTPUT_TILED_PDF))
+        return PZ_OK;
+    if (args->units == PZ_UNITS_AUTO && !pz_mesh_units_plausible(mesh, PZ_UNITS_AUTO))
+        return PZ_OK; /* a guess that fits no garment: the units check says so, more plainly */
+    double mm = pz_units_to_mm(args->units == PZ_UNITS_AUTO ? pz_mesh_guess_units(mesh) : args->units);
+    return pz_export_check_tiled_area(pz_geom_total_area(mesh) * mm * mm, pz_cli_value(args, PZ_CLI_OPT_PAPER),
+                                      args->positionals[0], ctx);
+}
+
 /* MESH with its poses, or several panel files joined. */
 pz_status pz_cli_read_meshes(const pz_cli_args *args, pz_mesh **mesh, int32_t *file_vertex_offset, pz_ctx *ctx)
 {
@@ -120,6 +133,8 @@ pz_status pz_cli_read_meshes(const pz_cli_args *args, pz_mesh **mesh, int32_t *f
                                                    mesh, ctx);
         if (status == PZ_OK && file_vertex_offset)
             file_vertex_offset[0] = 0, file_vertex_offset[1] = (*mesh)->vertex_count;
+        if (status == PZ_OK && (status = check_tiled_size(args, *mesh, ctx)) != PZ_OK)
+            pz_mesh_free(mesh);
         return status;
     }
     pz_mesh **parts = calloc((size_t)count, sizeof *parts);
@@ -130,6 +145,8 @@ pz_status pz_cli_read_meshes(const pz_cli_args *args, pz_mesh **mesh, int32_t *f
         status = pz_mesh_read(args->positionals[i], &parts[i], ctx);
     if (status == PZ_OK)
         status = pz_mesh_join(parts, args->positionals, count, mesh, file_vertex_offset, ctx);
+    if (status == PZ_OK && (status = check_tiled_size(args, *mesh, ctx)) != PZ_OK)
+        pz_mesh_free(mesh);
     for (int32_t i = 0; i < count; ++i)
         pz_mesh_free(&parts[i]);
     free(parts);

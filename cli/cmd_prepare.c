@@ -67,6 +67,8 @@ static pz_status parse_length(const char *option, const char *text, int allow_ze
     return PZ_OK;
 }
 
+static pz_status refuse_input(const pz_cli_args *args, const char *path, pz_ctx *ctx);
+
 static pz_status parse_options(const pz_cli_args *args, pz_prepare_options *options, pz_ctx *ctx)
 {
     memset(options, 0, sizeof *options);
@@ -79,6 +81,9 @@ static pz_status parse_options(const pz_cli_args *args, pz_prepare_options *opti
     if (format != PZ_FORMAT_OBJ && format != PZ_FORMAT_PLY && format != PZ_FORMAT_GLB)
         return pz_error(ctx, PZ_ERR_USAGE, "prepare: %s: cannot write this format (use .obj, .ply or .glb)",
                         args->output_path);
+    /* Before the long work: never the input itself (by any path to it), and a place the file can be made. */
+    if ((status = refuse_input(args, args->output_path, ctx)) || (status = pz_output_file_check(args->output_path, ctx)))
+        return status;
     const char *edge = pz_cli_value(args, PZ_CLI_OPT_EDGE);
     if (edge && (status = parse_length("--edge", edge, 0, &options->target_edge, ctx)))
         return status;
@@ -160,6 +165,8 @@ static pz_status write_outputs(const pz_cli_args *args, const pz_prepare_result 
         if (!(paths[p] = sibling_path(out, p)))
             return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", out);
     pz_status status = paths[0] ? refuse_input(args, paths[0], ctx) : PZ_OK;
+    for (int p = 1; p <= separate && !status; ++p)
+        status = refuse_input(args, paths[p], ctx);
     int written = 1; /* paths[0], the seams, is written last */
     for (; written <= separate && !status; ++written) {
         pz_mesh view = *mesh;
@@ -255,6 +262,10 @@ pz_status pz_cli_prepare(const pz_cli_args *args, pz_ctx *ctx)
         return status;
     pz_units used = PZ_UNITS_AUTO;
     pz_cli_mesh_to_mm(args, mesh, &used, NULL);
+    if ((status = pz_mesh_check_units(mesh, used, args->units == PZ_UNITS_AUTO, path, ctx))) {
+        pz_mesh_free(&mesh);
+        return status;
+    }
     pz_prepare_result *result = NULL;
     int quiet = ctx->quiet;
     ctx->quiet = 1; /* the steps are printed once the whole run has succeeded */
@@ -271,7 +282,6 @@ pz_status pz_cli_prepare(const pz_cli_args *args, pz_ctx *ctx)
         remove_all(paths, pose_files + 1), remove(args->output_path);
     if (!status) {
         note_steps(&result->report, path, ctx);
-        pz_cli_warn_units(args, path, mesh, used, ctx);
         pz_note(ctx, "wrote %s: %d vertices, %d faces, %d seam curves%s%s", args->output_path,
                 (int)result->mesh->vertex_count, (int)result->mesh->face_count, (int)result->seam_count,
                 paths[0] ? " in " : "", paths[0] ? paths[0] : "");

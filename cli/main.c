@@ -351,7 +351,7 @@ void pz_cli_warn_units(const pz_cli_args *args, const char *path, const pz_mesh 
     pz_mesh_bbox(mesh, lo, hi);
     double extent = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     pz_note(ctx, "%s: warning: units guessed as %s, but then the largest extent (%.0f mm) is outside a "
-            "garment's 200-2000 mm; give --units if that is wrong", path, pz_units_str(used), extent);
+            "garment's 200-3000 mm; give --units if that is wrong", path, pz_units_str(used), extent);
 }
 
 pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_mesh **out,
@@ -364,12 +364,13 @@ pz_status pz_cli_load_valid_mesh(const pz_cli_args *args, const char *path, pz_m
         return status;
     pz_units used = PZ_UNITS_AUTO;
     pz_cli_mesh_to_mm(args, mesh, &used, NULL);
-    status = pz_mesh_prepare_quietly_first(&mesh, path, args->repair_flags, ctx);
+    status = pz_mesh_check_units(mesh, used, args->units == PZ_UNITS_AUTO, path, ctx);
+    if (status == PZ_OK)
+        status = pz_mesh_prepare_quietly_first(&mesh, path, args->repair_flags, ctx);
     if (status != PZ_OK) {
         pz_mesh_free(&mesh);
         return status;
     }
-    pz_cli_warn_units(args, path, mesh, used, ctx);
     if (units_used)
         *units_used = used;
     *out = mesh;

@@ -276,14 +276,6 @@ pz_status pz_cli_write_result(const pz_cli_args *args, pz_result *result, double
             "flatten %.1f ms, metrics %.1f ms, write %.1f ms, total %.1f ms", (int)result->pattern->panel_count,
             result->pattern->panel_count == 1 ? "" : "s", t->read, t->pattern, t->panels, t->flatten, t->metrics,
             t->pieces + t->write, t->read + t->total + t->write);
-    if (args->units == PZ_UNITS_AUTO && !pz_mesh_units_plausible(result->garment, PZ_UNITS_MM)) {
-        double lo[3], hi[3];
-        pz_mesh_bbox(result->garment, lo, hi);
-        double extent = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
-        pz_note(ctx, "%s: warning: units guessed as %s, but then the largest extent (%.0f mm) is outside a "
-                "garment's 200-2000 mm; give --units if that is wrong", args->positionals[0],
-                pz_units_str(result->units), extent);
-    }
     if (args->json) {
         if (report_text) {
             fputs(report_text, stdout);

@@ -257,3 +257,44 @@ void pz_output_abort(pz_output *out)
     free(out->tmp_path);
     out->path = out->tmp_path = NULL;
 }
+
+int pz_folder_probe(const char *folder)
+{
+    size_t size = strlen(folder) + 48;
+    char *probe = malloc(size);
+    if (!probe)
+        return ENOMEM;
+    snprintf(probe, size, "%s/.panelize-probe-%ld", folder, (long)getpid());
+    int failure = mkdir(probe, 0700) == 0 ? 0 : errno;
+    if (!failure)
+        rmdir(probe);
+    free(probe);
+    return failure;
+}
+
+/* Writes, syncs and removes a one-byte file at `probe`: 0, or the errno that failed. */
+static int probe_file(const char *probe)
+{
+    int fd = open(probe, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+    if (fd < 0)
+        return errno;
+    int failure = write(fd, "p", 1) == 1 && fsync(fd) == 0 ? 0 : (errno ? errno : EIO);
+    close(fd);
+    unlink(probe);
+    return failure;
+}
+
+pz_status pz_output_file_check(const char *path, pz_ctx *ctx)
+{
+    struct stat info;
+    if (stat(path, &info) == 0 && S_ISDIR(info.st_mode))
+        return pz_error(ctx, PZ_ERR_CREATE, "%s: cannot create: %s", path, strerror(EISDIR));
+    size_t size = strlen(path) + 48;
+    char *probe = malloc(size);
+    if (!probe)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", path);
+    snprintf(probe, size, "%s.probe-%ld", path, (long)getpid());
+    int failure = probe_file(probe);
+    free(probe);
+    return failure ? pz_error(ctx, PZ_ERR_CREATE, "%s: cannot create: %s", path, strerror(failure)) : PZ_OK;
+}

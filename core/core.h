@@ -176,6 +176,21 @@ pz_status pz_output_open(pz_output *out, const char *path, const char *mode, pz_
  */
 pz_status pz_input_open(const char *path, FILE **out, pz_ctx *ctx);
 pz_status pz_output_commit(pz_output *out, pz_ctx *ctx);
+
+/**
+ * Probes, before any long work, that the file `path` can be written: it is
+ * not a directory, and a probe file made beside it (written, synced and
+ * removed) succeeds, so a missing or read-only folder or a full disk is
+ * PZ_ERR_CREATE naming the path at once rather than after the computation.
+ */
+pz_status pz_output_file_check(const char *path, pz_ctx *ctx);
+
+/**
+ * The same probe for a folder about to be made in `folder` (an existing
+ * directory): a hidden probe folder is made there and removed. 0 on
+ * success, else the errno that made it fail.
+ */
+int pz_folder_probe(const char *folder);
 void pz_output_abort(pz_output *out);
 
 #ifdef __cplusplus

@@ -86,6 +86,16 @@ typedef struct pz_pieces {
     char size_name[32];
 } pz_pieces;
 
+/**
+ * Before any work: whether a garment of `area_mm2` could be tiled at all on
+ * `paper` ("a4", "letter" or NULL = a4). Every piece lies on the tiled sheet,
+ * and flattening keeps a piece's area within its strain, so a garment of more
+ * than twice the area of the most tiles pattern-tiled.pdf prints (20,000) is
+ * PZ_ERR_DATA naming `name` and its area at once, rather than after the whole
+ * computation (a garment read in the wrong units: 90 m tall).
+ */
+pz_status pz_export_check_tiled_area(double area_mm2, const char *paper, const char *name, pz_ctx *ctx);
+
 /** Export options. pz_export_options_default fills the defaults. */
 typedef struct pz_export_options {
     double seam_allowance_mm;    /* default 10 */

@@ -633,6 +633,19 @@ static int same_word(const char *a, const char *b)
     return *a == *b;
 }
 
+pz_status pz_export_check_tiled_area(double area_mm2, const char *paper, const char *name, pz_ctx *ctx)
+{
+    double width = paper && same_word(paper, "letter") ? 215.9 : 210.0;
+    double height = paper && same_word(paper, "letter") ? 279.4 : 297.0;
+    double tile_mm2 = (width - 2 * kPaperMargin - kOverlap) * (height - 2 * kPaperMargin - kOverlap);
+    if (!(area_mm2 > 2.0 * kMaxTiles * tile_mm2))
+        return PZ_OK;
+    return pz_error(ctx, PZ_ERR_DATA,
+                    "%s: %.0f m2 of garment cannot fit in %d pages of pattern-tiled.pdf; is the garment in the right "
+                    "units (--units)?",
+                    name, area_mm2 * 1e-6, (int)kMaxTiles);
+}
+
 static pz_status tiling_build(const pz_export_inputs *inputs, const sheet *sheet, tiling *out, pz_ctx *ctx)
 {
     memset(out, 0, sizeof *out);

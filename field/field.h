@@ -79,13 +79,19 @@ typedef struct pz_sketch {
  * Parses `{"curves": [[[x,y,z], ...], ...]}` (each curve at least 2 finite
  * points) from memory; `name` names the source in messages. Coordinates are
  * multiplied by `scale` (pass mesh->unit_scale so a sketch in the mesh file's
- * units lands on the millimetre mesh). Malformed input: PZ_ERR_DATA.
+ * units lands on the millimetre mesh). Malformed input, anything but white
+ * space after the JSON value, or more than PZ_SKETCH_MAX_CURVES curves:
+ * PZ_ERR_DATA.
  */
 pz_status pz_sketch_parse(const char *text, size_t size, const char *name, double scale, pz_sketch **out,
                           pz_ctx *ctx);
 /** The same from a file: PZ_ERR_OPEN when it cannot be read, PZ_ERR_DATA when malformed. */
 pz_status pz_sketch_read(const char *path, double scale, pz_sketch **out, pz_ctx *ctx);
 void pz_sketch_free(pz_sketch **sketch);
+
+/* The most curves a sketch may hold: each becomes a seam of its own (a garment has tens), and each is
+ * snapped to the mesh by a shortest-path search; 20,000 curves fit in a 2 MB file. */
+#define PZ_SKETCH_MAX_CURVES 1000
 
 /* How far a sketch point may lie from the surface: 2 % of the bounding-box diagonal, at least 10 mm
  * (a curve drawn on a slightly different version of the garment, a prepared or remeshed one, still fits). */

@@ -43,6 +43,9 @@ static const char *sketch_from_json(const cJSON *root, double scale, pz_sketch *
     if (!cJSON_IsArray(curves))
         return "expected an object with a \"curves\" array";
     int32_t curve_count = cJSON_GetArraySize(curves), point_count = 0;
+    if (curve_count > PZ_SKETCH_MAX_CURVES)
+        return "more than 1000 curves (PZ_SKETCH_MAX_CURVES): each becomes a seam";
+    _Static_assert(PZ_SKETCH_MAX_CURVES == 1000, "the message above names the limit");
     const cJSON *curve, *point;
     cJSON_ArrayForEach(curve, curves) {
         if (!cJSON_IsArray(curve) || cJSON_GetArraySize(curve) < 2)
@@ -77,9 +80,18 @@ pz_status pz_sketch_parse(const char *text, size_t size, const char *name, doubl
                           pz_ctx *ctx)
 {
     *out = NULL;
-    cJSON *root = cJSON_ParseWithLength(text, size);
+    const char *end = NULL;
+    cJSON *root = cJSON_ParseWithLengthOpts(text, size, &end, 0);
     if (!root)
         return pz_error(ctx, PZ_ERR_DATA, "%s: not valid JSON", name);
+    /* cJSON stops after the first value: anything but white space after it is a damaged file, not a sketch. */
+    while (end < text + size && (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r'))
+        ++end;
+    if (end < text + size) {
+        cJSON_Delete(root);
+        return pz_error(ctx, PZ_ERR_DATA, "%s: not valid JSON: something follows the JSON value at byte %zu", name,
+                        (size_t)(end - text));
+    }
     pz_sketch *sketch = calloc(1, sizeof *sketch);
     const char *problem = sketch ? sketch_from_json(root, scale > 0.0 ? scale : 1.0, sketch) : "out of memory";
     cJSON_Delete(root);
@@ -263,6 +275,9 @@ static int32_t grid_closest_face(const face_grid *grid, const pz_mesh *mesh, con
     return best;
 }
 
+/* At most this many samples per face of the garment over the whole sketch. */
+#define SKETCH_SAMPLES_PER_FACE 4.0
+
 /* Per-face 4th-power sums of the sketch tangents (re, im: face_count each). */
 int field_sketch_accumulate(const pz_mesh *mesh, const field_frames *fr, const pz_sketch *sketch, double mean_edge,
                              double *re, double *im)
@@ -272,7 +287,19 @@ int field_sketch_accumulate(const pz_mesh *mesh, const field_frames *fr, const p
         grid_free(&grid);
         return 0;
     }
-    double step = 0.25 * (mean_edge > 0.0 ? mean_edge : 1.0);
+    /*
+     * A quarter mean edge apart, unless the curves are longer in all than
+     * SKETCH_SAMPLES_PER_FACE samples per face (20,000 curves across the
+     * garment in a 2 MB file): then fewer, evenly, so a sketch costs at most a
+     * few snaps per face whatever its size.
+     */
+    double step = 0.25 * (mean_edge > 0.0 ? mean_edge : 1.0), total_length = 0.0;
+    for (int32_t c = 0; c < sketch->curve_count; ++c)
+        for (int32_t i = sketch->curve_offsets[c]; i + 1 < sketch->curve_offsets[c + 1]; ++i)
+            total_length += pz_vec3_distance(sketch->points + 3 * (size_t)i, sketch->points + 3 * (size_t)i + 3);
+    double budget = SKETCH_SAMPLES_PER_FACE * (double)mesh->face_count + 1000.0;
+    if (total_length / step > budget)
+        step = total_length / budget;
     for (int32_t c = 0; c < sketch->curve_count; ++c)
         for (int32_t i = sketch->curve_offsets[c]; i + 1 < sketch->curve_offsets[c + 1]; ++i) {
             const double *a = sketch->points + 3 * (size_t)i, *b = a + 3;

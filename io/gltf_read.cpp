@@ -41,7 +41,7 @@
  *    primitives; primitives that end up with the same name share a label.
  *  - Morph targets become extra poses: pose k = rest + displacement k (a
  *    target without POSITION repeats the rest pose). Every triangle primitive
- *    must have the same number of targets. mesh.weights are ignored: the rest
+ *    must have the same number of targets, at most PZ_MESH_MAX_POSES. mesh.weights are ignored: the rest
  *    pose is the base mesh.
  *  - Vertices are not welded across primitives (a later step does that), with
  *    one exception: when every triangle primitive of a mesh has the custom
@@ -314,6 +314,9 @@ private:
                 if (!is_triangle_mode(primitive.mode))
                     continue;
                 int target_count = (int)primitive.targets.size();
+                if (target_count > PZ_MESH_MAX_POSES)
+                    fail_data(mesh_what((int)m, (int)p) + ": has " + std::to_string(target_count) +
+                              " morph targets (at most " + std::to_string(PZ_MESH_MAX_POSES) + " poses are supported)");
                 if (pose_count_ < 0)
                     pose_count_ = target_count;
                 else if (target_count != pose_count_)

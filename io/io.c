@@ -223,6 +223,9 @@ pz_status pz_mesh_read_with_poses(const char *path, const char *const *pose_path
         status = pz_mesh_read(pose_paths[i], &pose, ctx);
         if (!status)
             status = io_check_pose(rest, path, pose, pose_paths[i], ctx);
+        if (!status && rest->pose_count >= PZ_MESH_MAX_POSES)
+            status = pz_error(ctx, PZ_ERR_DATA, "%s: one pose too many: at most %d extra poses are supported",
+                              pose_paths[i], PZ_MESH_MAX_POSES);
         if (!status)
             status = pz_mesh_add_pose(rest, pose->positions, ctx);
         pz_mesh_free(&pose);

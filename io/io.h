@@ -55,11 +55,11 @@ pz_status pz_mesh_read(const char *path, pz_mesh **out, pz_ctx *ctx);
 /**
  * Parsers from memory, for tests and fuzzing. `name` is used in messages.
  * OBJ: v, vt, f (v, v/vt, v//vn, v/vt/vn, negative indices), polygons
- * fan-triangulated, `g`/`o` groups become labels, other lines ignored.
+ * triangulated level by level (no fan), `g`/`o` groups become labels, other lines ignored.
  * PLY: ascii, binary_little_endian, binary_big_endian; vertex x y z,
  * face vertex_indices / vertex_index lists, optional per-vertex s t / u v /
  * texture_u texture_v (shared per vertex), other properties skipped.
- * OFF: OFF / COFF / NOFF headers, polygons fan-triangulated.
+ * OFF: OFF / COFF / NOFF headers, polygons triangulated likewise.
  */
 pz_status pz_obj_read_memory(const char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);
 pz_status pz_ply_read_memory(const unsigned char *data, size_t size, const char *name, pz_mesh **out, pz_ctx *ctx);

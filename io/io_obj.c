@@ -8,7 +8,7 @@
  *   vt u [v [w]]          texture coordinate (v defaults to 0)
  *   f a b c ...           corners as v, v/vt, v//vn or v/vt/vn; 1-based, or
  *                         negative = relative to the elements defined so far;
- *                         polygons are fan-triangulated (a b c), (a c d), ...
+ *                         polygons are triangulated level by level (io/polygon.h)
  *   g NAME / o NAME       starts a group: faces that follow get label NAME
  *                         (the whole rest of the line, trimmed; a repeated
  *                         name reuses its label)
@@ -45,6 +45,7 @@
  */
 #include "io/io.h"
 #include "core/util.h"
+#include "io/polygon.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -383,8 +384,8 @@ static pz_status obj_read_corner(obj_reader *reader, const char **cursor, const 
     return PZ_OK;
 }
 
-/* Appends triangles (0, i, i+1) of the polygon just read. */
-static pz_status obj_add_fan(obj_reader *reader, size_t corner_count)
+/* Appends the triangles of the polygon just read (io/polygon.h). */
+static pz_status obj_add_polygon(obj_reader *reader, size_t corner_count)
 {
     size_t triangle_count = corner_count - 2;
     size_t needed = reader->face_count + triangle_count;
@@ -395,11 +396,13 @@ static pz_status obj_add_fan(obj_reader *reader, size_t corner_count)
         !pz_grow((void **)&reader->face_labels, &reader->face_labels_capacity, needed, sizeof(int32_t)))
         return obj_out_of_memory(reader);
     const int32_t *vertices = reader->polygon_vertices, *uvs = reader->polygon_uvs;
-    for (size_t t = 0; t < triangle_count; ++t) {
+    io_polygon_walk walk = {corner_count, 1, 0};
+    size_t corner[3];
+    while (io_polygon_next(&walk, corner)) {
         size_t face = reader->face_count++;
         int32_t *corners = reader->faces + 3 * face, *corner_uvs = reader->corner_uvs + 3 * face;
-        corners[0] = vertices[0], corners[1] = vertices[t + 1], corners[2] = vertices[t + 2];
-        corner_uvs[0] = uvs[0], corner_uvs[1] = uvs[t + 1], corner_uvs[2] = uvs[t + 2];
+        for (int k = 0; k < 3; ++k)
+            corners[k] = vertices[corner[k]], corner_uvs[k] = uvs[corner[k]];
         reader->face_labels[face] = reader->current_label;
     }
     return PZ_OK;
@@ -426,7 +429,7 @@ static pz_status obj_read_face(obj_reader *reader, const char *p, const char *en
     if (corner_count < 3)
         return pz_error(reader->ctx, PZ_ERR_DATA, "%s: line %ld: face with %zu corners (at least 3 needed)",
                         reader->name, reader->line, corner_count);
-    return obj_add_fan(reader, corner_count);
+    return obj_add_polygon(reader, corner_count);
 }
 
 static pz_status obj_read_group(obj_reader *reader, const char *p, const char *end)

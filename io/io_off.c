@@ -9,7 +9,7 @@
  * comment anywhere, blank lines are skipped, and '\r' is whitespace.
  * Header keywords: OFF, COFF, NOFF, CNOFF, STOFF, STCOFF, STNOFF, STCNOFF
  * (the 4OFF / nOFF dimensions and "OFF BINARY" are refused as unsupported).
- * Polygons are fan-triangulated. Texture coordinates of STOFF are not read
+ * Polygons are triangulated level by level (io/polygon.h). Texture coordinates of STOFF are not read
  * (their position on the line depends on optional colour fields).
  *
  * Failure (PZ_ERR_DATA, "NAME: line N: problem"): a missing or unknown
@@ -22,6 +22,7 @@
  */
 #include "io/io.h"
 #include "core/util.h"
+#include "io/polygon.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -211,11 +212,12 @@ static pz_status off_read_face(off_reader *reader, const char *line, const char 
         return off_fail(reader, "too many faces");
     if (!pz_grow((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)))
         return off_out_of_memory(reader);
-    for (int64_t t = 0; t + 2 < corner_count; ++t) {
+    io_polygon_walk walk = {(size_t)corner_count, 1, 0};
+    size_t corner[3];
+    while (io_polygon_next(&walk, corner)) {
         int32_t *corners = reader->faces + 3 * reader->face_count++;
-        corners[0] = reader->polygon[0];
-        corners[1] = reader->polygon[t + 1];
-        corners[2] = reader->polygon[t + 2];
+        for (int k = 0; k < 3; ++k)
+            corners[k] = reader->polygon[corner[k]];
     }
     return PZ_OK;
 }

@@ -9,7 +9,7 @@
  *  - element "vertex": scalar x, y, z (any numeric type) and optionally a UV
  *    pair s/t, u/v, texture_u/texture_v or texture_s/texture_t. Per-vertex UVs
  *    become corner UVs equal to the vertex indices (uv_count = vertex_count).
- *  - element "face": list vertex_indices (or vertex_index), fan-triangulated,
+ *  - element "face": list vertex_indices (or vertex_index), triangulated (io/polygon.h),
  *    and optionally a scalar "label" that becomes the face label; label values
  *    are renumbered densely in increasing order (identity for 0..K-1), and
  *    header lines "comment pz_label K NAME" (written by our writer) give
@@ -38,6 +38,7 @@
  */
 #include "io/io.h"
 #include "core/util.h"
+#include "io/polygon.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -460,7 +461,7 @@ static pz_status ply_check_count(ply_reader *reader, const ply_element *element)
     return PZ_OK;
 }
 
-/* Appends the fan of the polygon just read, with its label. */
+/* Appends the triangles of the polygon just read (io/polygon.h), with its label. */
 static pz_status ply_add_polygon(ply_reader *reader, size_t corner_count, int64_t label, int64_t polygon_number)
 {
     if (corner_count < 3)
@@ -472,12 +473,13 @@ static pz_status ply_add_polygon(ply_reader *reader, size_t corner_count, int64_
     if (!pz_grow((void **)&reader->faces, &reader->faces_capacity, 3 * needed, sizeof(int32_t)) ||
         !pz_grow((void **)&reader->face_labels, &reader->face_labels_capacity, needed, sizeof(int64_t)))
         return ply_out_of_memory(reader);
-    for (size_t t = 0; t + 2 < corner_count; ++t) {
+    io_polygon_walk walk = {corner_count, 1, 0};
+    size_t corner[3];
+    while (io_polygon_next(&walk, corner)) {
         /* Indices are checked against the vertex count once every element has been read. */
         int32_t *corners = reader->faces + 3 * reader->face_count;
-        corners[0] = (int32_t)reader->polygon[0];
-        corners[1] = (int32_t)reader->polygon[t + 1];
-        corners[2] = (int32_t)reader->polygon[t + 2];
+        for (int k = 0; k < 3; ++k)
+            corners[k] = (int32_t)reader->polygon[corner[k]];
         reader->face_labels[reader->face_count++] = label;
     }
     return PZ_OK;

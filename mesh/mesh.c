@@ -178,7 +178,22 @@ static double largest_extent(const pz_mesh *mesh)
 int pz_mesh_units_plausible(const pz_mesh *mesh, pz_units units)
 {
     double extent_mm = largest_extent(mesh) * pz_units_to_mm(units == PZ_UNITS_AUTO ? pz_mesh_guess_units(mesh) : units);
-    return extent_mm >= 200.0 && extent_mm <= 2000.0;
+    return extent_mm >= PZ_MESH_HUMAN_MIN_MM && extent_mm <= PZ_MESH_HUMAN_MAX_MM;
+}
+
+pz_status pz_mesh_check_units(const pz_mesh *mesh, pz_units used, int guessed, const char *name, pz_ctx *ctx)
+{
+    double extent_m = largest_extent(mesh) / 1000.0;
+    if (mesh->vertex_count == 0 || !isfinite(extent_m) || pz_mesh_units_plausible(mesh, PZ_UNITS_MM))
+        return PZ_OK; /* a non-finite coordinate is the validation's to report */
+    if (guessed)
+        return pz_error(ctx, PZ_ERR_DATA,
+                        "%s: cannot tell its units: read as %s (the closest reading to a garment) it is %.3g m "
+                        "across, outside a garment's 0.2-3 m; give --units mm, cm or m",
+                        name, pz_units_str(used), extent_m);
+    pz_note(ctx, "%s: warning: in %s (--units) it is %.3g m across, outside a garment's 0.2-3 m", name,
+            pz_units_str(used), extent_m);
+    return PZ_OK;
 }
 
 pz_units pz_mesh_guess_units(const pz_mesh *mesh)
@@ -220,6 +235,9 @@ void pz_mesh_to_mm(pz_mesh *mesh, pz_units units, pz_units *used)
 
 pz_status pz_mesh_add_pose(pz_mesh *mesh, const double *positions, pz_ctx *ctx)
 {
+    if (mesh->pose_count >= PZ_MESH_MAX_POSES)
+        return pz_error(ctx, PZ_ERR_DATA, "more than %d poses (at most %d extra poses are supported)",
+                        PZ_MESH_MAX_POSES, PZ_MESH_MAX_POSES);
     size_t pose_size = (size_t)mesh->vertex_count * 3;
     double *grown = realloc(mesh->poses, (size_t)(mesh->pose_count + 1) * pose_size * sizeof(double) + 1);
     if (!grown)

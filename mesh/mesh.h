@@ -117,11 +117,24 @@ double pz_units_to_mm(pz_units units);
 pz_units pz_mesh_guess_units(const pz_mesh *mesh);
 
 /**
- * 1 when the mesh's largest extent, read in `units`, lies in a garment's
- * 200 - 2000 mm. A guess that is not plausible deserves a warning: the mesh is
- * either not a garment or in a unit panelize cannot tell (give --units).
+ * 1 when the mesh's largest extent, read in `units`, lies in a human's
+ * 200 - 3000 mm (PZ_MESH_HUMAN_MIN_MM .. PZ_MESH_HUMAN_MAX_MM). A guess that
+ * is not plausible is refused by pz_mesh_check_units: the mesh is either not
+ * a garment or in a unit panelize cannot tell (give --units).
  */
 int pz_mesh_units_plausible(const pz_mesh *mesh, pz_units units);
+
+#define PZ_MESH_HUMAN_MIN_MM 200.0
+#define PZ_MESH_HUMAN_MAX_MM 3000.0
+
+/**
+ * After pz_mesh_to_mm: whether the mesh, now in millimetres, has a garment's
+ * size (largest extent 0.2 - 3 m). When not and the units were `guessed`,
+ * PZ_ERR_DATA naming `name`, the reading and its size, asking for --units (a
+ * 90 m or a 9 mm garment is a wrong guess, not a garment to cut); when not
+ * and the units were given, a warning note and PZ_OK (the user said so).
+ */
+pz_status pz_mesh_check_units(const pz_mesh *mesh, pz_units used, int guessed, const char *name, pz_ctx *ctx);
 
 /**
  * Scales the positions and every pose to millimetres. `units` AUTO means
@@ -130,7 +143,15 @@ int pz_mesh_units_plausible(const pz_mesh *mesh, pz_units units);
 void pz_mesh_to_mm(pz_mesh *mesh, pz_units units, pz_units *used);
 
 /**
- * Adds one pose (vertex_count x 3 positions, copied) to the mesh.
+ * The most extra poses a mesh may carry (glTF morph targets and pose files
+ * together). Every pose is flattened and measured with the rest: a file of
+ * 1.7 MB can declare 100,000 morph targets, whose work would have no bound.
+ */
+#define PZ_MESH_MAX_POSES 256
+
+/**
+ * Adds one pose (vertex_count x 3 positions, copied) to the mesh; more than
+ * PZ_MESH_MAX_POSES is PZ_ERR_DATA.
  */
 pz_status pz_mesh_add_pose(pz_mesh *mesh, const double *positions, pz_ctx *ctx);
 

@@ -151,6 +151,7 @@ pz_status pz_output_folder_check(const char *folder, pz_ctx *ctx)
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
     char *ancestor = existing_ancestor(parent);
     pz_status status = PZ_OK;
+    int failure = 0;
     if (!ancestor)
         status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
     else if (stat(ancestor, &info) != 0 || !S_ISDIR(info.st_mode))
@@ -159,6 +160,9 @@ pz_status pz_output_folder_check(const char *folder, pz_ctx *ctx)
     else if (access(ancestor, W_OK | X_OK) != 0)
         status = pz_error(ctx, PZ_ERR_CREATE, "%s: cannot create the output folder: %s: %s", folder, ancestor,
                           strerror(errno));
+    else if ((failure = pz_folder_probe(ancestor)) != 0) /* what access() cannot tell: root, a read-only mount */
+        status = pz_error(ctx, PZ_ERR_CREATE, "%s: cannot create the output folder: %s: %s", folder, ancestor,
+                          strerror(failure));
     free(ancestor), free(parent), free(name);
     return status;
 }

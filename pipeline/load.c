@@ -225,6 +225,8 @@ pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepa
         return status;
     pz_mesh_to_mm(garment->mesh, options->units, &result->units);
     result->units_guessed = options->units == PZ_UNITS_AUTO;
+    if ((status = pz_mesh_check_units(garment->mesh, result->units, result->units_guessed, name, ctx)) != PZ_OK)
+        return status;
     measure_pose_spread(garment->mesh, result, ctx);
     int prepared = 0;
     if (prepare && (status = prepare_automatically(options, result, &garment->mesh, &prepared, ctx)) != PZ_OK)

@@ -267,6 +267,8 @@ typedef struct pz_result {
     int32_t looser_settings;         /* looser goal settings laid out first (monotone panel counts) */
     int32_t looser_most_panels;
     int looser_seeded;
+    double looser_reachable_strain;  /* the strictest S among them whose layout met every goal (at the run's C); <= 0: none */
+    int32_t looser_reachable_panels; /* that layout's panels */
     double pattern_mirror_rms_mm;    /* mirror symmetry of the flattened pieces; -1 when not measured */
     double pattern_mirror_max_mm;
     /* The mirror plane (docs/segment.md, "Symmetry"): found or given before the field (its figures only: the

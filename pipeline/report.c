@@ -608,6 +608,10 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
         ok &= add_plain_number(ladder, "settings", result->looser_settings);
         ok &= add_plain_number(ladder, "most_panels", result->looser_most_panels);
         ok &= cJSON_AddBoolToObject(ladder, "seeded", result->looser_seeded) != NULL;
+        if (result->looser_reachable_strain > 0) {
+            ok &= add_plain_number(ladder, "reachable_strain", result->looser_reachable_strain);
+            ok &= add_plain_number(ladder, "reachable_panels", result->looser_reachable_panels);
+        }
         cJSON *timings = cJSON_AddObjectToObject(ladder, "timings_ms");
         ok &= timings && add_plain_number(timings, "total", pz_round(result->timings.looser_goals, 3));
     }

@@ -58,6 +58,7 @@ typedef struct ladder_rung {
     double max_strain;
     uint8_t *cuts;
     int32_t panels;
+    int goals_met;       /* its layout met every goal of its setting (the reachable S, pl_segmenter_report) */
 } ladder_rung;
 
 struct pl_segmenter {
@@ -633,6 +634,7 @@ static pz_status ladder_cuts(pl_segmenter *seg, pz_mesh *garment, const pz_topol
         rung->max_strain = max_strain;
         rung->max_corners = max_corners;
         rung->panels = segment->panel_count;
+        rung->goals_met = segment->goals_met;
         rung->cuts = malloc((size_t)topology->edge_count + 1);
         if (!rung->cuts)
             status = pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
@@ -878,6 +880,16 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->looser_settings = seg->rung_count;
     result->looser_most_panels = seg->seed_panels;
     result->looser_seeded = seg->seeded;
+    /* The strictest S of the ladder that its layout met, at the run's C: what the run can promise when its
+     * own S cannot be met (the final verdict names it). */
+    result->looser_reachable_strain = -1;
+    result->looser_reachable_panels = 0;
+    for (int32_t i = 0; i < seg->rung_count; ++i) {
+        const ladder_rung *rung = seg->rungs + i;
+        if (rung->goals_met && rung->max_corners == seg->goals.goals.max_corners &&
+            (result->looser_reachable_strain < 0 || rung->max_strain < result->looser_reachable_strain))
+            result->looser_reachable_strain = rung->max_strain, result->looser_reachable_panels = rung->panels;
+    }
     result->timings.field = seg->field_ms;
     result->timings.segment = seg->segment_ms;
     result->timings.looser_goals = seg->ladder_ms;

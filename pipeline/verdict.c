@@ -255,13 +255,19 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
     write_reasons(verdict, &goals, pattern->panel_count);
     /* Where the layout merged slivers, S was given up on purpose: say so (docs/segment.md, "Piece shapes"). */
     int32_t merged = result->segment ? result->segment->merged_slivers : 0;
-    char why[256] = "";
+    char why[512] = "";
     if (!layout_reachable && merged > 0)
         snprintf(why, sizeof why, " (%d pieces under %g mm or %g %% of the area merged into their neighbours rather "
                  "than cut: a sliver is never the answer to S; best effort written)", (int)merged,
                  goals.min_piece_width_mm, 100 * goals.min_piece_area);
     else if (!layout_reachable)
         snprintf(why, sizeof why, " (the layout could not meet them; best effort written)");
+    /* The S that can be met, from the looser settings laid out first: the one figure a user can act on. */
+    if (!layout_reachable && result->looser_reachable_strain > 0) {
+        size_t used = strlen(why);
+        snprintf(why + used, sizeof why - used, "; S = %g cannot be met here, S = %g can (%d panels)",
+                 goals.max_strain, result->looser_reachable_strain, (int)result->looser_reachable_panels);
+    }
     pz_note(ctx, "run: goals %s: %d of %d panels miss them, %d exceed S = %g, worst strain %.3g%s",
             layout_reachable ? "not met" : "unreachable", (int)verdict->failing_panels, (int)pattern->panel_count,
             (int)verdict->over_strain_panels, goals.max_strain, verdict->worst_strain, why);

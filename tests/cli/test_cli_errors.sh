@@ -126,8 +126,10 @@ run info unreferenced.obj --json --quiet
 check "info unreferenced.obj: exit $rc" [ "$rc" -eq 0 ]
 check "info unreferenced.obj: should be manifold with the note listed" \
     json_true 'd["manifold"] is True and d["boundary_loops"] == 1 and len(d["problems"]) >= 1'
-run check unreferenced.obj --quiet
+# (--units m: 5 units across fits no garment in any unit, which a guess refuses, tested below.)
+run check unreferenced.obj --units m --quiet
 check "check unreferenced.obj: exit $rc" [ "$rc" -eq 0 ]
+expect_error 65 "give --units" -- check unreferenced.obj
 
 # Inputs that are not regular files are refused at once (exit 66) instead of blocking for ever (a FIFO
 # with no writer) or reading without end (/dev/zero), and a large file that is not what its name says is

@@ -280,7 +280,13 @@ report_checks "run --max-strain 0" hemi0 \
     "goals_met is not false" "d['summary']['goals_met'] is False" \
     "the reasons do not start with a summary: $(grep -o '"goals_reasons":[^\n]*' hemi0/report.json | head -c 200)" \
     "re.match(r'\d+ of \d+ panels miss the goals \(\d+ exceed S = 0, worst strain [0-9.e-]+\): panel', d['summary']['goals_reasons'])" \
-    "a strain printed as 0.0000 > 0" "'0.0000 >' not in d['summary']['goals_reasons']"
+    "a strain printed as 0.0000 > 0" "'0.0000 >' not in d['summary']['goals_reasons']" \
+    "no reachable S from the looser settings (one of S = 0.05 ... 0.01 met its goals on the hemisphere)" \
+    "0 < d['segmentation']['looser_goals']['reachable_strain'] <= 0.05 and d['segmentation']['looser_goals']['reachable_panels'] >= 1"
+# The diagnosis names the S that can be met, the same as the report's (issue 15: impossible goals say so).
+reachable=$(python3 -c "import json; print('%g' % json.load(open('hemi0/report.json'))['segmentation']['looser_goals'].get('reachable_strain', -1))")
+check "run --max-strain 0: the note does not name the reachable S = $reachable: $(grep unreachable "$WORK/err" | tail -c 200)" \
+    grep -q "; S = 0 cannot be met here, S = $reachable can ([0-9]* panels)" "$WORK/err"
 
 # Two components (two garment parts side by side): each is segmented; every panel stays in one part.
 python3 - <<'PY'

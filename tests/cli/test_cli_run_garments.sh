@@ -30,7 +30,10 @@ for garment in "$DATA"/garments/*.obj "$DATA"/garments/*.ply; do
     name=$(basename "$garment")
     out=run-${name%.*}
     start=$(date +%s%N)
-    run run "$garment" -o "$out" --quiet
+    units=()
+    # The wetsuit is 4.3 file units tall: 4.3 m or 43 mm, neither a garment's size, so a guess refuses it.
+    [ "$name" = parafashion-wetsuit.obj ] && units=(--units m)
+    run run "$garment" -o "$out" "${units[@]}" --quiet
     seconds=$(( ($(date +%s%N) - start) / 1000000 ))e-3
     check "run $name: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]
     [ "$rc" -eq 0 ] || continue

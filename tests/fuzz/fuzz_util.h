@@ -42,4 +42,42 @@ static inline int fuzz_end(pz_status status, pz_mesh **mesh, pz_ctx *ctx)
     return 0;
 }
 
+/*
+ * The readers of the input files besides the mesh take a path: the bytes are
+ * written to one scratch file per process (its name ends in `suffix`, made
+ * once, rewritten for every input, removed at exit) and its path is
+ * returned, NULL when it cannot be written.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+static char fuzz_file_path[256];
+
+static void fuzz_file_remove(void)
+{
+    unlink(fuzz_file_path);
+}
+
+static inline const char *fuzz_file(const uint8_t *data, size_t size, const char *suffix)
+{
+    char *path = fuzz_file_path;
+    if (!path[0]) {
+        snprintf(path, sizeof fuzz_file_path, "/tmp/pz-fuzz-%ld%s", (long)getpid(), suffix);
+        atexit(fuzz_file_remove);
+    }
+    FILE *file = fopen(path, "wb");
+    if (!file)
+        return NULL;
+    size_t written = fwrite(data, 1, size, file);
+    return fclose(file) == 0 && written == size ? path : NULL;
+}
+
+/* The start of a file reader's target: a quiet context, the bytes in the scratch file (NULL: skip the input). */
+static inline const char *fuzz_begin_file(pz_ctx *ctx, const uint8_t *data, size_t size, const char *suffix)
+{
+    fuzz_ctx_init(ctx);
+    return fuzz_file(data, size, suffix);
+}
+
 #endif

@@ -69,12 +69,45 @@ static void test_negative_and_forward_indices(void)
     }
 }
 
+/* A regular n-gon of every n from 3 to 130: n - 2 triangles, all counter-clockwise, covering its area exactly. */
+static void test_polygon_cover(void)
+{
+    char text[16384];
+    for (int n = 3; n <= 130; ++n) {
+        size_t used = 0;
+        for (int i = 0; i < n; ++i)
+            used += (size_t)snprintf(text + used, sizeof text - used, "v %.17g %.17g 0\n", cos(2 * 3.14159265358979323846 * i / n),
+                                     sin(2 * 3.14159265358979323846 * i / n));
+        used += (size_t)snprintf(text + used, sizeof text - used, "f");
+        for (int i = 0; i < n; ++i)
+            used += (size_t)snprintf(text + used, sizeof text - used, " %d", i + 1);
+        pz_mesh *mesh = read_ok(text);
+        if (!mesh)
+            continue;
+        double area = 0.0, smallest = INFINITY;
+        for (int32_t f = 0; f < mesh->face_count; ++f) {
+            const double *a = mesh->positions + 3 * mesh->faces[3 * f], *b = mesh->positions + 3 * mesh->faces[3 * f + 1],
+                         *c = mesh->positions + 3 * mesh->faces[3 * f + 2];
+            double signed_area = 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]));
+            area += signed_area;
+            smallest = fmin(smallest, signed_area);
+        }
+        double expected = 0.5 * n * sin(2 * 3.14159265358979323846 / n);
+        CHECK(mesh->face_count == n - 2 && smallest > 0 && fabs(area - expected) < 1e-9,
+              "%d-gon: %d triangles, smallest signed area %g, area %.12f (expected %.12f)", n, mesh->face_count,
+              smallest, area, expected);
+        pz_mesh_free(&mesh);
+    }
+}
+
 static void test_polygons(void)
 {
     pz_mesh *mesh = read_ok("v 0 0 0\nv 1 0 0\nv 2 1 0\nv 1 2 0\nv 0 1 0\nf 1 2 3 4 5\n");
     if (mesh) {
         CHECK(mesh->face_count == 3, "pentagon -> 3 triangles, got %d", mesh->face_count);
-        CHECK(test_face_is(mesh, 0, 0, 1, 2) && test_face_is(mesh, 1, 0, 2, 3) && test_face_is(mesh, 2, 0, 3, 4), "fan order");
+        /* Level by level (io/polygon.h): (0,1,2), (2,3,4), then (0,2,4). */
+        CHECK(test_face_is(mesh, 0, 0, 1, 2) && test_face_is(mesh, 1, 2, 3, 4) && test_face_is(mesh, 2, 0, 2, 4),
+              "triangulation order");
         pz_mesh_free(&mesh);
     }
     /* One face line of 20000 corners: lines of any length. */
@@ -90,8 +123,13 @@ static void test_polygons(void)
     mesh = read_ok(text);
     if (mesh) {
         CHECK(mesh->face_count == (int32_t)corner_count - 2, "long polygon: %d faces", mesh->face_count);
-        CHECK(test_face_is(mesh, mesh->face_count - 1, 0, (int32_t)corner_count - 2, (int32_t)corner_count - 1),
-              "last fan triangle");
+        /* Not a fan: no corner is in more than 2 log2(n) + 2 triangles (a fan puts corner 0 in all of them). */
+        int32_t *uses = calloc(corner_count, sizeof *uses), most = 0;
+        REQUIRE(uses != NULL, "calloc");
+        for (int32_t i = 0; i < 3 * mesh->face_count; ++i)
+            most = ++uses[mesh->faces[i]] > most ? uses[mesh->faces[i]] : most;
+        CHECK(most <= 2 * 15 + 2, "long polygon: a corner is in %d triangles", (int)most);
+        free(uses);
         pz_mesh_free(&mesh);
     }
     free(text);
@@ -237,6 +275,7 @@ int main(void)
     test_corner_forms();
     test_negative_and_forward_indices();
     test_polygons();
+    test_polygon_cover();
     test_groups();
     test_uv_rules();
     test_whitespace_and_skipped_lines();
