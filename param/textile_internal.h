@@ -133,11 +133,11 @@
  * OpenMP's fork/join, and on a loaded machine threads descheduled while the
  * others spin at a barrier, cost more than they save below that. Measured on
  * the 2-core machine at load 3-4, 20K faces: 19 ms per iteration on one
- * thread, 113 ms on two (2x slower even at load 0.3 with active waiting).
- * So by default only patterns of PARALLEL_MIN_FACES faces run threaded; an
- * explicit options->threads >= 2 lowers that to PARALLEL_MIN_FACES_ASKED. */
+ * thread, 113 ms on two (2x slower even at load 0.3 with active waiting);
+ * asked for explicitly, 75 ms against 10 ms at load 5 (issue 17). So only
+ * patterns of PARALLEL_MIN_FACES faces run threaded, and only on the cores
+ * the load average leaves free, whatever options->threads asks. */
 #define PARALLEL_MIN_FACES 100000
-#define PARALLEL_MIN_FACES_ASKED 8192
 
 /* Sums over faces or vertices must not depend on the thread count (the same
  * pattern byte for byte, issue 5; the energies steer the line search): a
@@ -184,7 +184,8 @@ typedef struct coordinate_solver {
     cholmod_factor *factor;   /* a copy of the panel's symbolic analysis, numeric from its first factorization */
     cholmod_dense *rhs, *solution, *work_y, *work_e;
     cholmod_dense *residual;  /* PCG: r, the right-hand side of the preconditioner solve */
-    double *product, *current; /* PCG: A x or A z, and the iterate */
+    double *product, *current; /* PCG: A x or A p, and the iterate */
+    double *direction;        /* PCG: the search direction p */
     int factored;             /* the factor holds some earlier matrix's numbers */
     int borrowing;            /* v only: preconditions with u's factor (until it needs its own) */
     int fresh;                /* the factor was made from this iteration's matrix: solve directly */
@@ -195,6 +196,9 @@ typedef struct coordinate_solver {
     double *grain_gradient;   /* the panel's grain_gradient for this coordinate at the last assembly */
     double *grain_response;   /* A^-1 of it (grain_response), computed once per factorization */
     int response_ready;       /* grain_response belongs to the current factor */
+    int32_t factorizations;   /* numeric factorizations in this solve (pz_textile_result) */
+    int32_t failed_steps;     /* PCG solves that failed in this solve */
+    int32_t pcg_solves;       /* preconditioner solves of PCG in this solve */
 } coordinate_solver;
 
 typedef struct panel_system {
