@@ -111,9 +111,9 @@ static int pcg_solve(const panel_system *system, coordinate_solver *solver, chol
         }
         if (rz_new <= PCG_MODEL_TOLERANCE * scale || rz_new <= PCG_REDUCTION * rz_start || steps == budget)
             break;
-        double beta = steps == 0 ? 0 : rz_new / rz;
+        double beta = steps == 0 ? 0 : rz_new / rz; /* p's old contents are garbage at step 0 (0 * NaN) */
         for (int32_t l = 0; l < n; ++l)
-            p[l] = z[l] + beta * p[l];
+            p[l] = steps == 0 ? z[l] : z[l] + beta * p[l];
         rz = rz_new;
         symmetric_product(solver->matrix, p, ap);
         double pap = 0;
