@@ -128,6 +128,8 @@
  * saving is small and the trajectories of the test meshes changed more. */
 #define BORROW_MIN_STEPS 40
 #define FACTOR_FLOP_COST 2.0
+/* Panels below this many faces get simplicial factors (textile_setup.c). */
+#define SIMPLICIAL_MAX_FACES 100000
 
 /* Threads pay only when every parallel region has milliseconds of work:
  * OpenMP's fork/join, and on a loaded machine threads descheduled while the

@@ -187,8 +187,9 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
          * ones on the reference BLAS (dgemv_ + dtrsv_), and the iteration
          * makes many solves per factorization (docs/param.md, "Speed
          * against libigl": 15-25 % less CPU per iteration from 2K to 34K
-         * faces, the same at 200K). */
-        system->solver[k].common.supernodal = CHOLMOD_SIMPLICIAL;
+         * faces); from SIMPLICIAL_MAX_FACES on CHOLMOD chooses (supernodal at
+         * the 200K hemisphere). */
+        system->solver[k].common.supernodal = count < SIMPLICIAL_MAX_FACES ? CHOLMOD_SIMPLICIAL : CHOLMOD_AUTO;
     }
     coordinate_solver *su = &system->solver[0], *sv = &system->solver[1];
     cholmod_triplet *triplet = cholmod_allocate_triplet(n, n, (size_t)6 * count + system->segment_count, 1,

@@ -17,6 +17,7 @@ packages=(
   # The measuring tools (bench/bench_layouts, ../shared/tools/seamscore.py, gtpattern.py, render.py)
   # run under /usr/bin/python3 and need these; nothing panelize builds or tests links them.
   python3-numpy python3-scipy python3-matplotlib
+  libeigen3-dev           # only bench_peer's libigl peer (cmake --build build --target igl_peer) includes it
   clang libclang-rt-14-dev  # libFuzzer targets
 )
 
