@@ -2,8 +2,8 @@
  * param/textile_global.c -- the global step of the textile parameterization:
  * each panel's two coordinate systems assembled from the local step's
  * shares, factorized when needed (numerically only: the symbolic analysis
- * is the set-up's) and solved with one step of preconditioned conjugate
- * gradients or directly; and the projection that keeps a step from turning
+ * is the set-up's) and solved by preconditioned conjugate gradients or
+ * directly; and the projection that keeps a step from turning
  * the panels. The design: param/textile_internal.h.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
@@ -296,8 +296,8 @@ static int factorize_when_needed(panel_system *system, int k)
 
 /*
  * Solves coordinate k of one panel and writes it into uv: directly with a
- * factor made this iteration, otherwise one preconditioned step
- * (pcg_solve). A step that fails leaves uv alone and marks the coordinate
+ * factor made this iteration, otherwise preconditioned (pcg_solve; with a
+ * strain goal one_step_solve). A solve that fails leaves uv alone and marks the coordinate
  * `failed` (textile_global_step then factorizes and solves it directly), and asks
  * for factorizations in the next iterations too: 1, 2, 4, ... 16 in a row
  * on repeated failures (large, uneven distortion: the face scan), so a

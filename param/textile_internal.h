@@ -39,10 +39,12 @@
  *     adjacency) but not their values (c_u != c_v), so each has its own
  *     matrix and factor; CHOLMOD's symbolic analysis is done once per panel
  *     at setup and copied. The matrix changes every iteration (c depends on
- *     the 2D triangles), but slowly: each system takes one step of conjugate
+ *     the 2D triangles), but slowly: each system is solved by conjugate
  *     gradients preconditioned with the factor of an earlier iteration's
- *     matrix, refactorized (numerically only) when that factor has gone
- *     stale (pcg_solve). Panels are independent given the seam targets, so
+ *     matrix (a few steps; one on panels of 50K vertices and, with a strain
+ *     goal, the one-step solve of before issue 17), refactorized
+ *     (numerically only) when that factor has gone stale (pcg_solve,
+ *     one_step_solve). Panels are independent given the seam targets, so
  *     the 2 x panels systems are solved in parallel (OpenMP). Once a step
  *     has needed backtracking, the step is projected so it does not turn the
  *     panels (project_grain_turn: step 1 would turn them back).
@@ -80,8 +82,8 @@
  *
  * Cost per iteration: O(F) for the local step and the assembly (a scatter
  * of each face's precomputed share into precomputed CSC slots, no
- * allocation), plus one preconditioned step per coordinate (two triangular
- * solves, two products) and an occasional numeric factorization. Memory:
+ * allocation), plus a few preconditioned steps per coordinate (each two
+ * triangular solves and a product) and an occasional numeric factorization. Memory:
  * per face 3 doubles per pose (the 3D frame coordinates), 2 (the grain in
  * the frame), the local-step output (18 doubles) and 6 matrix slots; per
  * panel two CSC matrices and one or two factors (v borrows u's on large
