@@ -54,13 +54,6 @@
 
 #include "bench_util.h"
 
-static double cpu_seconds(void)
-{
-    struct timespec now;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &now);
-    return (double)now.tv_sec + 1e-9 * (double)now.tv_nsec;
-}
-
 /* Wall time, CPU time and peak resident size of one call. */
 typedef struct run_clock {
     long before_kb;
@@ -70,7 +63,7 @@ typedef struct run_clock {
 
 static run_clock clock_start(void)
 {
-    run_clock clock = {.before_kb = bench_status_kb("VmRSS"), .start = pz_seconds(), .cpu_start = cpu_seconds()};
+    run_clock clock = {.before_kb = bench_status_kb("VmRSS"), .start = pz_seconds(), .cpu_start = bench_cpu_seconds()};
     return clock;
 }
 
@@ -79,35 +72,20 @@ static run_clock clock_start(void)
 static void clock_stop(run_clock *clock, int32_t faces)
 {
     clock->total_ms = 1e3 * (pz_seconds() - clock->start);
-    clock->cpu_ms = 1e3 * (cpu_seconds() - clock->cpu_start);
+    clock->cpu_ms = 1e3 * (bench_cpu_seconds() - clock->cpu_start);
     long peak_kb = bench_status_kb("VmHWM") - clock->before_kb;
     peak_kb = peak_kb > 0 ? peak_kb : 0;
     clock->peak_mb = peak_kb / 1024.0;
     clock->peak_bytes_per_face = 1024.0 * peak_kb / faces;
 }
 
-/* CPU time when the start's energy is reported (iteration 0: the
- * initialization is done) and when the last iterate's is. */
-typedef struct iteration_cpu {
-    double start, last;
-} iteration_cpu;
-
-static void record_cpu(void *user, int iteration, double energy)
-{
-    (void)energy;
-    iteration_cpu *cpu = user;
-    cpu->last = cpu_seconds();
-    if (iteration == 0)
-        cpu->start = cpu->last;
-}
-
 static int run_textile(const char *name, const pz_pattern *pattern, int threads, double *uv, pz_ctx *ctx)
 {
     const pz_mesh *mesh = pattern->mesh;
-    iteration_cpu cpu = {0, 0};
+    bench_iteration_cpu cpu = {0, 0};
     run_clock clock = clock_start();
     pz_textile_options options = {.iterations = 20, .tolerance = 1e-300, .threads = threads,
-                                  .on_iteration = record_cpu, .user = &cpu};
+                                  .on_iteration = bench_record_cpu, .user = &cpu};
     pz_textile_result result;
     if (pz_param_textile(pattern, &options, uv, &result, ctx)) {
         fprintf(stderr, "bench_param: %s: %s\n", name, ctx->error);
@@ -184,12 +162,8 @@ static int measure(int32_t faces, int lscm, int threads)
         return 2;
     }
     pz_pattern pattern;
-    memset(&pattern, 0, sizeof pattern);
-    pattern.mesh = mesh;
-    pattern.panel_count = 1;
-    pattern.face_panel = calloc((size_t)mesh->face_count, sizeof(int32_t));
-    double *uv = malloc((size_t)mesh->vertex_count * 2 * sizeof(double));
-    int failed = !pattern.face_panel || !uv ||
+    double *uv = NULL;
+    int failed = !bench_one_panel(mesh, &pattern, &uv) ||
                  (lscm ? run_lscm(name, &pattern, uv, &ctx) : run_textile(name, &pattern, threads, uv, &ctx));
     free(uv);
     free(pattern.face_panel);

@@ -42,12 +42,8 @@ static int run(const char *name, pz_mesh *mesh, const char *label, const pz_spri
     pz_ctx_init(&ctx);
     ctx.quiet = 1;
     pz_pattern pattern;
-    memset(&pattern, 0, sizeof pattern);
-    pattern.mesh = mesh;
-    pattern.panel_count = 1;
-    pattern.face_panel = calloc((size_t)mesh->face_count, sizeof(int32_t));
-    double *uv = malloc((size_t)mesh->vertex_count * 2 * sizeof(double));
-    if (!pattern.face_panel || !uv) {
+    double *uv = NULL;
+    if (!bench_one_panel(mesh, &pattern, &uv)) {
         fprintf(stderr, "bench_springmass: out of memory\n");
         return 1;
     }

@@ -60,4 +60,10 @@ int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_c
  * moves made, -1 when out of memory. */
 int32_t pz_param_untangle(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
 
+/* Puts the apex of every sliver face (3D height under 5e-2 of its longest
+ * edge) where the 3D triangle puts it over its flattened longest edge,
+ * unless the apex is fixed (may be NULL) or a face around it would flip
+ * (param/slivers.c says why). Returns the apexes moved, -1 out of memory. */
+int32_t pz_param_fit_slivers(const pz_mesh *mesh, const uint8_t *fixed, double *uv);
+
 #endif /* PZ_PARAM_INTERNAL_H */

@@ -184,6 +184,9 @@ typedef struct pz_textile_result {
     int damped_steps;         /* global steps shortened (backtracked) to keep the energy from rising or faces from flipping */
     int32_t length_only_seams; /* seams held to equal length only (seam_mirror_tolerance, strain_limit) */
     int32_t length_only_darts; /* darts held to equal legs without axis symmetry (strain_limit) */
+    int32_t factorizations;   /* numeric factorizations of the global step's systems (docs/param.md, "Speed") */
+    int32_t failed_steps;     /* preconditioned solves that could not start (solved directly instead) */
+    int32_t pcg_solves;       /* triangular solves with an earlier factor (preconditioned conjugate gradients) */
 } pz_textile_result;
 
 /**

@@ -621,6 +621,9 @@ pz_status sm_panel_finish(sm_panel *p, sm_outcome *outcome, double *map, int32_t
      * springs have no barrier, so unflip them geometrically (no flip added; a matched outline stays) */
     if (sm_flipped_faces(p) > 0 && pz_param_untangle(p->mesh, p->pinned, p->uv) < 0)
         return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
+    /* slivers: edge lengths leave their apexes free (issue 17: strain 31,772); the pinned outline stays */
+    if (pz_param_fit_slivers(p->mesh, p->pinned, p->uv) < 0)
+        return pz_error(ctx, PZ_ERR_NOMEM, "springmass: out of memory");
     outcome->final_energy = sm_total_energy(p);
     sm_accuracy(p, &outcome->e_area, &outcome->e_shape);
     if (map)

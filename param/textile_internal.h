@@ -39,10 +39,12 @@
  *     adjacency) but not their values (c_u != c_v), so each has its own
  *     matrix and factor; CHOLMOD's symbolic analysis is done once per panel
  *     at setup and copied. The matrix changes every iteration (c depends on
- *     the 2D triangles), but slowly: each system takes one step of conjugate
+ *     the 2D triangles), but slowly: each system is solved by conjugate
  *     gradients preconditioned with the factor of an earlier iteration's
- *     matrix, refactorized (numerically only) when that factor has gone
- *     stale (pcg_solve). Panels are independent given the seam targets, so
+ *     matrix (a few steps; one on panels of 50K vertices and, with a strain
+ *     goal, the one-step solve of before issue 17), refactorized
+ *     (numerically only) when that factor has gone stale (pcg_solve,
+ *     one_step_solve). Panels are independent given the seam targets, so
  *     the 2 x panels systems are solved in parallel (OpenMP). Once a step
  *     has needed backtracking, the step is projected so it does not turn the
  *     panels (project_grain_turn: step 1 would turn them back).
@@ -80,8 +82,8 @@
  *
  * Cost per iteration: O(F) for the local step and the assembly (a scatter
  * of each face's precomputed share into precomputed CSC slots, no
- * allocation), plus one preconditioned step per coordinate (two triangular
- * solves, two products) and an occasional numeric factorization. Memory:
+ * allocation), plus a few preconditioned steps per coordinate (each two
+ * triangular solves and a product) and an occasional numeric factorization. Memory:
  * per face 3 doubles per pose (the 3D frame coordinates), 2 (the grain in
  * the frame), the local-step output (18 doubles) and 6 matrix slots; per
  * panel two CSC matrices and one or two factors (v borrows u's on large
@@ -128,16 +130,18 @@
  * saving is small and the trajectories of the test meshes changed more. */
 #define BORROW_MIN_STEPS 40
 #define FACTOR_FLOP_COST 2.0
+/* Panels below this many faces get simplicial factors (textile_setup.c). */
+#define SIMPLICIAL_MAX_FACES 100000
 
 /* Threads pay only when every parallel region has milliseconds of work:
  * OpenMP's fork/join, and on a loaded machine threads descheduled while the
  * others spin at a barrier, cost more than they save below that. Measured on
  * the 2-core machine at load 3-4, 20K faces: 19 ms per iteration on one
- * thread, 113 ms on two (2x slower even at load 0.3 with active waiting).
- * So by default only patterns of PARALLEL_MIN_FACES faces run threaded; an
- * explicit options->threads >= 2 lowers that to PARALLEL_MIN_FACES_ASKED. */
+ * thread, 113 ms on two (2x slower even at load 0.3 with active waiting);
+ * asked for explicitly, 75 ms against 10 ms at load 5 (issue 17). So only
+ * patterns of PARALLEL_MIN_FACES faces run threaded, and only on the cores
+ * the load average leaves free, whatever options->threads asks. */
 #define PARALLEL_MIN_FACES 100000
-#define PARALLEL_MIN_FACES_ASKED 8192
 
 /* Sums over faces or vertices must not depend on the thread count (the same
  * pattern byte for byte, issue 5; the energies steer the line search): a
@@ -184,7 +188,8 @@ typedef struct coordinate_solver {
     cholmod_factor *factor;   /* a copy of the panel's symbolic analysis, numeric from its first factorization */
     cholmod_dense *rhs, *solution, *work_y, *work_e;
     cholmod_dense *residual;  /* PCG: r, the right-hand side of the preconditioner solve */
-    double *product, *current; /* PCG: A x or A z, and the iterate */
+    double *product, *current; /* PCG: A x or A p, and the iterate */
+    double *direction;        /* PCG: the search direction p */
     int factored;             /* the factor holds some earlier matrix's numbers */
     int borrowing;            /* v only: preconditions with u's factor (until it needs its own) */
     int fresh;                /* the factor was made from this iteration's matrix: solve directly */
@@ -195,6 +200,9 @@ typedef struct coordinate_solver {
     double *grain_gradient;   /* the panel's grain_gradient for this coordinate at the last assembly */
     double *grain_response;   /* A^-1 of it (grain_response), computed once per factorization */
     int response_ready;       /* grain_response belongs to the current factor */
+    int32_t factorizations;   /* numeric factorizations in this solve (pz_textile_result) */
+    int32_t failed_steps;     /* PCG solves that failed in this solve */
+    int32_t pcg_solves;       /* preconditioner solves of PCG in this solve */
 } coordinate_solver;
 
 typedef struct panel_system {

@@ -34,9 +34,10 @@ static void solver_end(coordinate_solver *solver)
     cholmod_free_dense(&solver->residual, &solver->common);
     free(solver->product);
     free(solver->current);
+    free(solver->direction);
     free(solver->grain_gradient);
     free(solver->grain_response);
-    solver->product = solver->current = solver->grain_gradient = solver->grain_response = NULL;
+    solver->product = solver->current = solver->direction = solver->grain_gradient = solver->grain_response = NULL;
     cholmod_free_factor(&solver->factor, &solver->common);
 }
 
@@ -182,7 +183,13 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
     for (int k = 0; k < 2; ++k) {
         cholmod_start(&system->solver[k].common);
         system->solver[k].started = 1;
-        system->solver[k].common.supernodal = CHOLMOD_AUTO; /* as in lscm.c */
+        /* Simplicial: its solves (CHOLMOD's own loops) beat the supernodal
+         * ones on the reference BLAS (dgemv_ + dtrsv_), and the iteration
+         * makes many solves per factorization (docs/param.md, "Speed
+         * against libigl": 15-25 % less CPU per iteration from 2K to 34K
+         * faces); from SIMPLICIAL_MAX_FACES on CHOLMOD chooses (supernodal at
+         * the 200K hemisphere). */
+        system->solver[k].common.supernodal = count < SIMPLICIAL_MAX_FACES ? CHOLMOD_SIMPLICIAL : CHOLMOD_AUTO;
     }
     coordinate_solver *su = &system->solver[0], *sv = &system->solver[1];
     cholmod_triplet *triplet = cholmod_allocate_triplet(n, n, (size_t)6 * count + system->segment_count, 1,
@@ -254,6 +261,7 @@ static int panel_begin(panel_system *system)
     for (int k = 0; k < 2 && allocated; ++k) {
         coordinate_solver *s = &system->solver[k];
         s->factored = s->fresh = s->failed = s->refactor = s->direct_runs = s->response_ready = 0;
+        s->factorizations = s->failed_steps = s->pcg_solves = 0;
         s->backoff = 1;
         s->borrowing = k == 1 && s->max_steps >= BORROW_MIN_STEPS;
         s->factor = cholmod_copy_factor(system->symbolic, &s->common);
@@ -261,9 +269,11 @@ static int panel_begin(panel_system *system)
         s->residual = cholmod_zeros(n, 1, CHOLMOD_REAL, &s->common);
         s->product = malloc(n * sizeof(double) + 1);
         s->current = malloc(n * sizeof(double) + 1);
+        s->direction = malloc(n * sizeof(double) + 1);
         s->grain_gradient = malloc(n * sizeof(double) + 1);
         s->grain_response = calloc(n + 1, sizeof(double));
-        allocated = s->factor && s->rhs && s->residual && s->product && s->current && s->grain_gradient &&
+        allocated = s->factor && s->rhs && s->residual &&  s->product && s->current && s->direction &&
+                    s->grain_gradient &&
                     s->grain_response;
     }
     return allocated;
@@ -700,9 +710,12 @@ static void read_options(pz_textile_solver *solver, const pz_textile_options *op
     }
     double up[3] = {0, 0, 1};
     memcpy(state->grain, options->grain_given ? options->grain : up, sizeof state->grain);
-    state->threads = options->threads > 0 ? options->threads : default_threads();
-    state->parallel = state->threads > 1 && state->pattern->mesh->face_count >=
-                                                (options->threads > 0 ? PARALLEL_MIN_FACES_ASKED : PARALLEL_MIN_FACES);
+    /* An explicit count is a ceiling: a second thread that finds no free
+     * core, or too little work between barriers, makes the iteration slower
+     * (docs/param.md, "Threads"); the result is the same for any count. */
+    int spare = default_threads();
+    state->threads = options->threads > 0 && options->threads < spare ? options->threads : spare;
+    state->parallel = state->threads > 1 && state->pattern->mesh->face_count >= PARALLEL_MIN_FACES;
     /* A parallel loop over one panel leaves every thread but one spinning at
      * the barrier (on a busy machine, descheduled: 5x slower iterations were
      * measured), so one-panel patterns split the work inside the panel. */

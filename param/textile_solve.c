@@ -556,6 +556,12 @@ pz_status pz_textile_solve(pz_textile_solver *solver, double *uv, pz_textile_res
     memcpy(uv, solver->start_uv, (size_t)pattern->mesh->vertex_count * 2 * sizeof(double));
     outcome.length_only_seams = textile_classify_seams(state, uv);
     status = run_rounds(solver, &control, uv, &outcome, ctx);
+    for (int32_t p = 0; p < pattern->panel_count; ++p)
+        for (int k = 0; k < 2; ++k) {
+            outcome.factorizations += state->panels[p].solver[k].factorizations;
+            outcome.failed_steps += state->panels[p].solver[k].failed_steps;
+            outcome.pcg_solves += state->panels[p].solver[k].pcg_solves;
+        }
     step_control_free(&control);
     textile_state_end(state);
     if (status)

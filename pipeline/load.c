@@ -7,8 +7,10 @@
  * Vertex ids: the user's panels, seams and darts name the caller's vertices
  * and faces, so the map from the caller's ("raw") ids to the prepared
  * garment's is kept: dropping unreferenced vertices is a known compaction;
- * any other change (a repair that drops faces, the automatic preparation)
- * means the ids no longer apply, and ids_preserved says so.
+ * so is --repair's split of non-manifold vertices (the copies are appended
+ * after the kept vertices); any other change (a repair that drops faces,
+ * the automatic preparation) means the ids no longer apply, and
+ * ids_preserved says so.
  *
  * garment.obj keeps the input's coordinates exactly: positions_out holds the
  * caller's own numbers while the ids still match (x * 10 / 10 need not give
@@ -183,15 +185,33 @@ static pz_status output_positions(const pz_mesh *input, const pl_garment *garmen
     result->positions_out = malloc(((size_t)mesh->vertex_count + 1) * 3 * sizeof(double));
     if (!result->positions_out)
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
-    if (garment->ids_preserved) {
-        for (int32_t v = 0; v < garment->raw_vertex_count; ++v)
-            if (garment->raw_to_garment[v] >= 0)
-                memcpy(result->positions_out + 3 * (size_t)garment->raw_to_garment[v],
-                       input->positions + 3 * (size_t)v, 3 * sizeof(double));
-        return PZ_OK;
-    }
     for (size_t i = 0; i < 3 * (size_t)mesh->vertex_count; ++i)
         result->positions_out[i] = mesh->positions[i] / mesh->unit_scale;
+    if (!garment->ids_preserved)
+        return PZ_OK;
+    /* The input's own numbers where it has them. */
+    for (int32_t v = 0; v < garment->raw_vertex_count; ++v)
+        if (garment->raw_to_garment[v] >= 0)
+            memcpy(result->positions_out + 3 * (size_t)garment->raw_to_garment[v], input->positions + 3 * (size_t)v,
+                   3 * sizeof(double));
+    /* --repair's split copies (after the kept vertices) take them from the vertex they copy: the corner of
+     * the same input face (faces keep their order) at exactly the copy's position. */
+    int32_t kept = 0;
+    for (int32_t v = 0; v < garment->raw_vertex_count; ++v)
+        kept += garment->raw_to_garment[v] >= 0;
+    for (int32_t c = 0; c < 3 * mesh->face_count; ++c) {
+        int32_t copy = mesh->faces[c];
+        if (copy < kept)
+            continue;
+        const int32_t *face = input->faces + 3 * (c / 3);
+        for (int k = 0; k < 3; ++k) {
+            int32_t source = garment->raw_to_garment[face[k]];
+            if (memcmp(mesh->positions + 3 * (size_t)source, mesh->positions + 3 * (size_t)copy, 3 * sizeof(double)))
+                continue;
+            memcpy(result->positions_out + 3 * (size_t)copy, input->positions + 3 * (size_t)face[k], 3 * sizeof(double));
+            break;
+        }
+    }
     return PZ_OK;
 }
 
@@ -206,6 +226,22 @@ static void choose_grain(const pz_run_options *options, const pz_mesh *mesh, pz_
     /* y-up (glTF, CLO3D, Blender) and z-up (scanners, CAD) garments both get the warp along their height. */
     pz_mesh_vertical_axis(mesh, result->grain);
     result->grain_source = result->grain[1] > 0.5 ? "vertical axis (y)" : "vertical axis (z)";
+}
+
+/*
+ * --repair: what the automatic preparation repairs beyond pz_mesh_prepare's
+ * flags, without changing faces or vertex ids: faces beyond two on an edge
+ * dropped, non-manifold vertices split (pz_prepare_make_manifold). A garment
+ * whose true panels touch at single vertices is flattenable then.
+ */
+static pz_status split_nonmanifold(pz_mesh *mesh, const char *name, int32_t *split, pz_ctx *ctx)
+{
+    int32_t dropped = 0;
+    pz_status status = pz_prepare_make_manifold(mesh, &dropped, split, ctx);
+    if (status == PZ_OK && *split + dropped > 0)
+        pz_note(ctx, "%s: --repair split %d non-manifold vertices and dropped %d faces beyond two on an edge", name,
+                (int)*split, (int)dropped);
+    return status;
 }
 
 pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepare, pz_result *result,
@@ -231,11 +267,16 @@ pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepa
     int prepared = 0;
     if (prepare && (status = prepare_automatically(options, result, &garment->mesh, &prepared, ctx)) != PZ_OK)
         return status;
+    int32_t split = 0;
+    if (options->repair_flags && !prepared && (status = split_nonmanifold(garment->mesh, name, &split, ctx)) != PZ_OK)
+        return status;
     status = pz_mesh_prepare_quietly_first(&garment->mesh, name, options->repair_flags, ctx);
     if (status != PZ_OK)
         return status;
     const pz_mesh *mesh = garment->mesh;
-    garment->ids_preserved = !prepared && mesh->face_count == garment->raw_face_count && mesh->vertex_count == kept;
+    /* Split vertices are copies appended after the kept ones: the caller's ids still map. */
+    garment->ids_preserved =
+        !prepared && mesh->face_count == garment->raw_face_count && mesh->vertex_count == kept + split;
     status = output_positions(input, garment, result, ctx);
     if (status != PZ_OK)
         return status;

@@ -112,6 +112,19 @@ pz_status pz_prepare(const pz_mesh *mesh, const pz_prepare_options *options, pz_
 pz_status pz_prepare_auto(const pz_mesh *mesh, const pz_prepare_options *options, pz_prepare_result **out,
                           pz_ctx *ctx);
 
+/**
+ * The repairs of the preparation that keep the faces and the existing
+ * vertex ids (what `flatten --repair` adds to pz_mesh_prepare's): faces
+ * beyond the first two on an edge dropped, non-manifold vertices split, one
+ * copy per fan of faces, the copies appended after the existing vertices
+ * (with their poses). Runs only when pz_mesh_validate finds non-manifold
+ * edges or vertices and nothing it cannot work on (corners out of range,
+ * non-finite coordinates: pz_mesh_prepare reports those). Corner UVs and
+ * face labels stay with their faces. *dropped_faces and *split_vertices
+ * (may be NULL) get the counts. Errors: PZ_ERR_NOMEM.
+ */
+pz_status pz_prepare_make_manifold(pz_mesh *mesh, int32_t *dropped_faces, int32_t *split_vertices, pz_ctx *ctx);
+
 /** Frees the result, its mesh and seams, and sets *result to NULL (NULL or *result NULL: nothing). */
 void pz_prepare_result_free(pz_prepare_result **result);
 

@@ -237,6 +237,36 @@ static pz_status make_manifold(pz_mesh *mesh, prep_edge_list *seams, pz_prepare_
     return status;
 }
 
+pz_status pz_prepare_make_manifold(pz_mesh *mesh, int32_t *dropped_faces, int32_t *split_vertices, pz_ctx *ctx)
+{
+    if (dropped_faces)
+        *dropped_faces = 0;
+    if (split_vertices)
+        *split_vertices = 0;
+    if (!mesh)
+        return pz_error(ctx, PZ_ERR_USAGE, "prepare: no mesh");
+    pz_validation found;
+    pz_status status = pz_mesh_validate(mesh, &found, ctx);
+    if (status)
+        return status;
+    /* Out-of-range corners or non-finite vertices: pz_mesh_prepare names them. */
+    int needed = (found.nonmanifold_edges || found.nonmanifold_vertices) && !found.bad_indices &&
+                 !found.nonfinite_coordinates && mesh->face_count > 0;
+    pz_validation_clear(&found);
+    if (!needed)
+        return PZ_OK;
+    pz_prepare_report report;
+    memset(&report, 0, sizeof report);
+    prep_edge_list seams = {0, 0, NULL};
+    status = make_manifold(mesh, &seams, &report, ctx);
+    free(seams.pairs);
+    if (dropped_faces)
+        *dropped_faces = report.nonmanifold_edge_faces;
+    if (split_vertices)
+        *split_vertices = report.split_vertices;
+    return status;
+}
+
 /* Orients the faces consistently, counting the flips (pz_mesh_prepare swaps corners 1 and 2 of the minority). */
 static pz_status orient(pz_mesh *mesh, const char *name, prep_edge_list *seams, pz_prepare_report *report,
                         pz_status *validity, pz_ctx *ctx)

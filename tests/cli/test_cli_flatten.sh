@@ -3,7 +3,8 @@
 # surfaces flatten without strain, a closed tube gets one self-seam of equal
 # sides, a hemisphere stays injective; the real skirt panels keep their seams
 # and darts symmetric; --panels uv finds the T-shirt's 4 panels and the
-# skirt's 4 panels and 8 darts; garment.obj
+# skirt's 4 panels and 8 darts; true panels touching at single vertices
+# flatten with --repair (the vertices split); garment.obj
 # keeps the input's vertices and faces; pattern.svg is well-formed 1:1 SVG;
 # every bad option and bad file fails with its exit code, one line naming the
 # culprit, and nothing written.
@@ -289,6 +290,72 @@ expect_ok "flatten again with --outputs json"
 check "the earlier run's files stayed: $(ls -A empty-out | tr '\n' ' ')" [ "$(ls -A empty-out | tr '\n' ' ')" = ".panelize report.json " ]
 check "a dead run's hidden folder stayed" [ ! -e .empty-out.tmp-999999 ]
 check "a hidden folder is left beside the output" [ -z "$(ls -A | grep '^\.empty-out')" ]
+
+# ------------------------------------------------------------------ true panels touching at single vertices: --repair
+# Three panels of a bent sheet (cylinder pieces, developable), each touching the next at one corner only: 2
+# non-manifold vertices. The vt are the panels' true flat shapes. Without --repair flatten refuses the mesh
+# (65, naming the vertex); with it the vertices are split as `run`'s preparation splits them, the faces and
+# the input's vertex lines stay, and the pieces come out flat and true.
+python3 - <<'PY'
+import math
+n, size, radius = 6, 60.0, 150.0
+v, vt, f = [], [], []
+for panel in range(3):
+    base, ox = len(v), panel * size  # panel K's corner (n, n) is panel K+1's corner (0, 0)
+    for i in range(n + 1):
+        for j in range(n + 1):
+            u, w = ox + size * i / n, panel * size + size * j / n
+            v.append((radius * math.sin(u / radius), radius * (1 - math.cos(u / radius)), w))
+            vt.append((u, w))
+    if panel > 0:  # weld this panel's corner (0, 0) onto the previous panel's corner (n, n)
+        v[base] = None
+    for i in range(n):
+        for j in range(n):
+            a, b = base + i * (n + 1) + j, base + (i + 1) * (n + 1) + j
+            c, d = b + 1, a + 1
+            f.append((a, b, c))
+            f.append((a, c, d))
+ids, out = {}, []
+for k, p in enumerate(v):
+    if p is not None:
+        ids[k] = len(out)
+        out.append(p)
+for panel in range(1, 3):  # the welded corners use the previous panel's last vertex
+    ids[panel * (n + 1) ** 2] = ids[panel * (n + 1) ** 2 - 1]
+with open('touching.obj', 'w') as obj:
+    obj.writelines('v %.9g %.9g %.9g\n' % p for p in out)
+    obj.writelines('vt %.9g %.9g\n' % t for t in vt)
+    obj.writelines('f %d/%d %d/%d %d/%d\n' % (ids[a] + 1, a + 1, ids[b] + 1, b + 1, ids[c] + 1, c + 1)
+                   for a, b, c in f)
+PY
+expect_error 65 non-manifold --absent touching -- flatten touching.obj --panels uv -o touching
+run flatten touching.obj --panels uv --repair -o touching --quiet
+expect_ok "flatten touching.obj --panels uv --repair"
+if [ "$rc" -eq 0 ]; then
+    report_checks "flatten touching.obj --repair" touching \
+        "three panels" "d['summary']['panel_count'] == 3" \
+        "flat and true: the pieces are developable" "d['summary']['max_abs_strain'] < 1e-3" \
+        "injective" "d['summary']['injective'] is True"
+    check "flatten --repair: garment.obj lost the input's faces or vertex lines" python3 - touching.obj \
+        touching/garment.obj <<'PY'
+import sys
+def read(path):
+    v, f = [], []
+    for line in open(path):
+        t = line.split()
+        if t and t[0] == 'v':
+            v.append(tuple(float(x) for x in t[1:4]))
+        elif t and t[0] == 'f':
+            f.append(tuple(int(c.split('/')[0]) for c in t[1:4]))
+    return v, f
+(v0, f0), (v1, f1) = read(sys.argv[1]), read(sys.argv[2])
+split = len(v1) - len(v0)
+# The two touching corners become two vertices each; every face keeps its corners' positions.
+ok = split == 2 and v1[:len(v0)] == v0 and len(f1) == len(f0)
+ok = ok and all(v1[a - 1] == v0[b - 1] for fa, fb in zip(f1, f0) for a, b in zip(fa, fb))
+sys.exit(0 if ok else 1)
+PY
+fi
 
 # ------------------------------------------------------------------ bad options (64) and bad data (65)
 expect_error 64 --backend --absent bad -- flatten tube.obj -o bad --backend magic
