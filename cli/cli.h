@@ -70,10 +70,11 @@
 #define PZ_CLI_OPT_SIZE (UINT64_C(1) << 39) /* --size NAME: the size printed on every piece */
 #define PZ_CLI_OPT_OUTPUTS (UINT64_C(1) << 40) /* --outputs LIST: the files to write (flatten, run) */
 #define PZ_CLI_OPT_MAX_SEAM_MISMATCH (UINT64_C(1) << 41) /* --max-seam-mismatch R (run) */
+#define PZ_CLI_OPT_MAX_PIECES (UINT64_C(1) << 42) /* --max-pieces N (run) */
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 33
+#define PZ_CLI_VALUE_COUNT 34
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;

@@ -51,7 +51,8 @@ static const pz_cli_command command_table[] = {
          PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |
          PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |
          PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |
-         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_EXPORT,
+         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_MAX_PIECES |
+             PZ_CLI_OPT_EXPORT,
      pz_cli_run},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
@@ -116,6 +117,7 @@ static const option_spec option_table[] = {
     {"size", 0, PZ_CLI_OPT_SIZE, 1},
     {"outputs", 0, PZ_CLI_OPT_OUTPUTS, 1},
     {"max-seam-mismatch", 0, PZ_CLI_OPT_MAX_SEAM_MISMATCH, 1},
+    {"max-pieces", 0, PZ_CLI_OPT_MAX_PIECES, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 

@@ -11,6 +11,7 @@
  *   flatten.c      the chosen back-end, the pieces laid out, metrics
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
+ *   tradeoff.c     the outlook on S before the segmentation, the trade-off curve after the verdict
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
  *   report.c       report.json (pz_result_report)
  *   write.c        pz_result_write: every file, all or nothing
@@ -173,6 +174,23 @@ pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, con
 
 /** The final verdict of a result (goals met, reasons, one note when missed) from its metrics. */
 pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- tradeoff.c */
+
+/**
+ * The outlook on S (docs/run.md, "Can S be met?"), taken on the prepared garment before the field and the
+ * segmentation: the poses' spread and the strain of sample pieces of the smallest sound size; one note
+ * naming an S that would work when they exceed S. PZ_ERR_NOMEM, PZ_ERR_CANCELLED.
+ */
+pz_status pl_strain_outlook(const pz_mesh *garment, const pz_run_options *options, const double grain[3],
+                            pz_strain_outlook *out, pz_ctx *ctx);
+
+/**
+ * The trade-off (docs/run.md): result->tradeoff from the final layout (result->segment on result->garment),
+ * merged down until the worst strain passes the grid's loosest goal. Left unmeasured (count 0) when it
+ * cannot be made; PZ_ERR_NOMEM, PZ_ERR_CANCELLED.
+ */
+pz_status pl_measure_tradeoff(pz_result *result, pz_ctx *ctx);
 
 /** The flattened pieces' own mirror symmetry (result->pattern_mirror_*), when the layout found a plane. */
 void pl_measure_pattern_symmetry(pz_result *result, pz_ctx *ctx);

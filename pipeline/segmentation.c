@@ -70,6 +70,7 @@ struct pl_segmenter {
     double *original_positions, *original_poses;
     pz_truing_result truing_result;
     pz_mesh *garment;                   /* the garment last segmented (for the verdict's goals) */
+    pz_strain_outlook outlook;          /* can S be met: taken once, before the field */
     pz_field *field;                    /* the cross-field of the original surface, computed once */
     /* Monotone panel counts (ladder_cuts): the looser settings' final cuts, seeded into this run's layout. */
     int ladder_done;                    /* 1: the layout and its verdict rounds were made by solve_setting */
@@ -232,6 +233,9 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
     pz_status status = pz_topology_build(garment, &topology, ctx);
     if (status == PZ_OK)
         status = gather_sketch(seg, garment, &sketch, ctx);
+    /* Before the long work: can S be met with sound pieces at all? (One line when it cannot.) */
+    if (status == PZ_OK && !seg->outlook.measured)
+        status = pl_strain_outlook(garment, seg->options, seg->grain, &seg->outlook, ctx);
     double start = pz_seconds();
     /* The field depends on the original surface only: a verdict round reuses it. */
     if (status == PZ_OK && !seg->field) {
@@ -252,7 +256,8 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
      * own verdict then accepts it as it is (the same flattening: accept_pattern). */
     int stricter = seg->goals.goals.max_strain < seg->defaults.max_strain ||
                    seg->goals.goals.max_corners < seg->defaults.max_corners;
-    if (status == PZ_OK && stricter && !seg->ladder_done) {
+    /* A piece budget decides the count itself: no looser settings to keep monotone. */
+    if (status == PZ_OK && stricter && !seg->ladder_done && seg->options->segment.max_pieces == 0) {
         seg->ladder_done = 1;
         seg->field_singularities = seg->field->singularity_count;
         pz_segment_result_free(&seg->segment);
@@ -521,6 +526,9 @@ static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_s
 {
     if (!segment || !garment || !segment->goals_met || goals->verdict_rounds >= MAX_VERDICT_ROUNDS)
         return 1;
+    /* With a piece budget the budget, not the goals, decides the pieces: the report says what is missed. */
+    if (segment->max_pieces > 0)
+        return 1;
     int32_t panels = pattern->panel_count, added = 0, *offsets = NULL, *order = NULL;
     goals->verdict_reasons[0] = '\0';
     int bucketed = pl_faces_by_panel(pattern, &offsets, &order);
@@ -643,6 +651,7 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->field_singularities = seg->field_singularities;
     result->verdict_rounds = seg->goals.verdict_rounds;
     result->vetoed_panels = seg->goals.vetoed_count;
+    result->outlook = seg->outlook;
     result->looser_settings = seg->rung_count;
     result->looser_most_panels = seg->seed_panels;
     result->looser_seeded = seg->seeded;

@@ -50,6 +50,18 @@ typedef struct seg_segments {
     seg_segment *items;
 } seg_segments;
 
+/* The garment's axes for the pattern maker's preferences (segment/preference.c). */
+typedef struct seg_frame {
+    double up[3];            /* the garment's vertical (pz_mesh_vertical_axis) */
+    double side[3];          /* horizontal, left to right: the symmetry plane's normal, else the area's widest spread */
+    double front[3];         /* up x side */
+    double centre[3];        /* the area centroid (moved onto the symmetry plane when one is in use) */
+    double diagonal;         /* of the bounding box */
+    double total_area;
+    double mean_radius;      /* area-weighted mean distance of the faces from the vertical axis through centre */
+    double *face_area;       /* face_count */
+} seg_frame;
+
 typedef struct seg_layout {
     const pz_mesh *mesh;
     const pz_topology *topology;
@@ -78,10 +90,13 @@ typedef struct seg_layout {
     int32_t *panel_faces;    /* face_count, each panel's faces increasing */
     pz_goal_result *panel_goals;
     uint8_t *panel_evaluated;
+    double *panel_area, *panel_wrap; /* per panel, set with its evaluation (seg_panel_shape) */
+    seg_frame frame;
     pz_segment_cache *cache;     /* options->cache, or own_cache */
     pz_segment_cache own_cache;
     struct seg_goal_scratch **goal_scratch; /* threads: evaluation scratch, created when first needed */
     int32_t evaluation_count;
+    int32_t removed_early;    /* segments removed during the insertion (before weak candidates) */
     int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
     double mean_edge;
     /* ctx->progress: the fraction reported last, and where the current part of the run ends (seg_progress). */
@@ -135,10 +150,58 @@ pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint
 #define SEG_FALLBACK_MAX_CUTS 256
 pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx);
 
+/* preference.c: the pattern maker's preferences (docs/segment.md, "Where seams go"). */
+pz_status seg_frame_init(seg_layout *layout, pz_ctx *ctx);
+void seg_frame_clear(seg_frame *frame);
+/* How far (degrees, 0..360) the faces wrap round the vertical axis through the frame's centre. */
+double seg_wrap_degrees(const seg_layout *layout, const int32_t *faces, int32_t count);
+/* Area and wrap of panel p into panel_area / panel_wrap (seg_evaluate_panels calls it). */
+void seg_panel_shape(seg_layout *layout, int32_t p);
+/* 1 when panel p is a large panel wrapped round the body (a tube or C round the torso): the layout splits it. */
+int seg_panel_is_band(const seg_layout *layout, int32_t p);
+/* The same test for faces of that wrap (degrees) and area (mm^2). */
+int seg_wrap_is_band(const seg_layout *layout, double wrap_deg, double area);
+/* A candidate's preference, its parts and the score they make (0..1). */
+typedef struct seg_preference {
+    double vertical;     /* length-weighted mean |tangent . up| */
+    double silhouette;   /* length-weighted mean of max(0, 1 - 2 |normal . front|): faces sideways, up or down */
+    double centre;       /* length-weighted: on the mid-plane and running in it */
+    double widening;     /* loops: the mean girth of the wider side (both sides round the body) over the length */
+    double junction;     /* loops: the surface beyond is wider than the loop (0..1, from widening) */
+    double alignment;    /* length / cost: 1 on the field's arms */
+    int encircles;       /* loops: winds round the vertical axis (round the body, not a limb) */
+    double score;        /* loops: max(junction, silhouette, centre); border paths max(silhouette, centre,
+                            vertical / 2) */
+} seg_preference;
+typedef struct seg_girth_scratch seg_girth_scratch;
+seg_girth_scratch *seg_girth_scratch_new(const seg_layout *layout);
+void seg_girth_scratch_free(seg_girth_scratch *scratch);
+pz_status seg_preference_measure(const seg_layout *layout, const pz_trace_path *path, seg_girth_scratch *scratch,
+                                 seg_preference *out, pz_ctx *ctx);
+
 /* removal.c */
 pz_status seg_segments_build(const seg_layout *layout, seg_segments *out, pz_ctx *ctx);
 void seg_segments_clear(seg_segments *segments);
 pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx);
 pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx);
+/* A set of edges changed together (a segment or part of it, plus its mirror image). */
+typedef struct seg_edge_set {
+    int32_t count;
+    int32_t *edges;
+} seg_edge_set;
+/* edges[0..n-1] and, with symmetry, their mirror images that are cut and not sketched. 0: out of memory. */
+int seg_edge_set_make(const seg_layout *layout, const int32_t *edges, int32_t n, seg_edge_set *out);
+/* Sets the set's cut flags to `cut` (labels become invalid). */
+void seg_edge_set_apply(seg_layout *layout, const seg_edge_set *set, uint8_t cut);
+/* 1 when, with the set uncut, some inner vertex keeps exactly one cut edge (a stub). */
+int seg_leaves_stub(seg_layout *layout, const seg_edge_set *set);
+/* 1 when every edge of the segment is cut. */
+int seg_all_cut(const seg_layout *layout, const seg_segment *s);
+
+/* budget.c (docs/segment.md, "A piece budget and the trade-off"): merges panels down to options->max_pieces;
+ * the merge sequence from the current layout (out->count steps, [0] the layout as it is) until one panel is
+ * left, no merge is valid or the worst strain exceeds stop_strain. Both lift the corner bound. */
+pz_status seg_budget_merge(seg_layout *layout, pz_segment_result *result, pz_ctx *ctx);
+pz_status seg_merge_sequence(seg_layout *layout, double stop_strain, pz_segment_tradeoff *out, pz_ctx *ctx);
 
 #endif

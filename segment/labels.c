@@ -63,7 +63,13 @@ static pz_status panel_arrays_resize(seg_layout *layout, int32_t panels, pz_ctx 
     uint8_t *evaluated = realloc(layout->panel_evaluated, (size_t)panels + 1);
     if (evaluated)
         layout->panel_evaluated = evaluated;
-    if (!offsets || !goals || !evaluated)
+    double *area = realloc(layout->panel_area, ((size_t)panels + 1) * sizeof(double));
+    if (area)
+        layout->panel_area = area;
+    double *wrap = realloc(layout->panel_wrap, ((size_t)panels + 1) * sizeof(double));
+    if (wrap)
+        layout->panel_wrap = wrap;
+    if (!offsets || !goals || !evaluated || !area || !wrap)
         return nomem(ctx);
     memset(evaluated, 0, (size_t)panels + 1);
     layout->panel_count = panels;

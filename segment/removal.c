@@ -172,14 +172,8 @@ void seg_segments_clear(seg_segments *segments)
 
 /* ---------------------------------------------------------------- edit sets */
 
-/* A set of edges changed together (a segment or part of it, plus its mirror image). */
-typedef struct edge_set {
-    int32_t count;
-    int32_t *edges;
-} edge_set;
-
 /* edges[0..n-1] and, with symmetry, their mirror images that are cut and not sketched. */
-static int edge_set_make(const seg_layout *layout, const int32_t *edges, int32_t n, edge_set *out)
+int seg_edge_set_make(const seg_layout *layout, const int32_t *edges, int32_t n, seg_edge_set *out)
 {
     out->count = 0;
     out->edges = malloc((size_t)2 * n * sizeof(int32_t) + 1);
@@ -200,7 +194,7 @@ static int edge_set_make(const seg_layout *layout, const int32_t *edges, int32_t
     return 1;
 }
 
-static void edge_set_apply(seg_layout *layout, const edge_set *set, uint8_t cut)
+void seg_edge_set_apply(seg_layout *layout, const seg_edge_set *set, uint8_t cut)
 {
     for (int32_t i = 0; i < set->count; ++i)
         layout->edge_cut[set->edges[i]] = cut;
@@ -208,11 +202,11 @@ static void edge_set_apply(seg_layout *layout, const edge_set *set, uint8_t cut)
 }
 
 /* 1 when, with the set uncut, some inner vertex keeps exactly one cut edge (a stub). */
-static int leaves_stub(seg_layout *layout, const edge_set *set)
+int seg_leaves_stub(seg_layout *layout, const seg_edge_set *set)
 {
     const pz_topology *t = layout->topology;
     int labels_valid = layout->labels_valid; /* the flags come back as they were */
-    edge_set_apply(layout, set, 0);
+    seg_edge_set_apply(layout, set, 0);
     int stub = 0;
     for (int32_t i = 0; i < set->count && !stub; ++i) {
         int32_t h = t->edge_halfedge[2 * set->edges[i]];
@@ -220,13 +214,15 @@ static int leaves_stub(seg_layout *layout, const edge_set *set)
         for (int k = 0; k < 2 && !stub; ++k)
             stub = !t->vertex_on_boundary[ends[k]] && seg_cut_degree(layout, ends[k]) == 1;
     }
-    edge_set_apply(layout, set, 1);
+    seg_edge_set_apply(layout, set, 1);
     layout->labels_valid = labels_valid;
     return stub;
 }
 
-/* Relabels and evaluates the panels next to the set's edges; *ok = 1 when none fails a goal in `mask`. */
-static pz_status panels_pass(seg_layout *layout, const edge_set *set, unsigned mask, int *ok, pz_ctx *ctx)
+/* Relabels and evaluates the panels next to the set's edges; *ok = 1 when none fails a goal in `mask` (nor,
+ * with `bands`, is a band round the body: segment/preference.c). */
+static pz_status panels_pass(seg_layout *layout, const seg_edge_set *set, unsigned mask, int bands, int *ok,
+                             pz_ctx *ctx)
 {
     *ok = 0;
     pz_status status = seg_label_panels(layout, ctx);
@@ -242,18 +238,28 @@ static pz_status panels_pass(seg_layout *layout, const edge_set *set, unsigned m
             if (h >= 0)
                 want[layout->face_panel[pz_he_face(h)]] = 1;
         }
+    /* A band is known from the faces alone: no flattening for it. */
+    for (int32_t p = 0; bands && p < layout->panel_count; ++p) {
+        if (!want[p])
+            continue;
+        seg_panel_shape(layout, p);
+        if (seg_panel_is_band(layout, p)) {
+            free(want);
+            return PZ_OK;
+        }
+    }
     status = seg_evaluate_panels(layout, want, ctx);
     *ok = !status;
     for (int32_t p = 0; p < layout->panel_count && *ok; ++p)
-        if (want[p] && (layout->panel_goals[p].failures & mask))
+        if (want[p] && ((layout->panel_goals[p].failures & mask) || (bands && seg_panel_is_band(layout, p))))
             *ok = 0;
     free(want);
     return status;
 }
 
-static pz_status panels_ok(seg_layout *layout, const edge_set *set, int *ok, pz_ctx *ctx)
+static pz_status panels_ok(seg_layout *layout, const seg_edge_set *set, int *ok, pz_ctx *ctx)
 {
-    return panels_pass(layout, set, ~0u, ok, ctx);
+    return panels_pass(layout, set, ~0u, 1, ok, ctx);
 }
 
 /*
@@ -261,9 +267,9 @@ static pz_status panels_ok(seg_layout *layout, const edge_set *set, int *ok, pz_
  * injectivity: re-gluing only adds faces to it, so the trial would fail (with
  * unreachable goals, S = 0, this spares a flattening per segment).
  */
-static pz_status worth_trying(seg_layout *layout, const edge_set *set, int *worth, pz_ctx *ctx)
+static pz_status worth_trying(seg_layout *layout, const seg_edge_set *set, int *worth, pz_ctx *ctx)
 {
-    return panels_pass(layout, set, PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED, worth, ctx);
+    return panels_pass(layout, set, PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED, 0, worth, ctx);
 }
 
 /* ---------------------------------------------------------------- removal */
@@ -295,7 +301,7 @@ static int compare_removal(const void *l, const void *r)
     return (a->first_edge > b->first_edge) - (a->first_edge < b->first_edge);
 }
 
-static int all_cut(const seg_layout *layout, const seg_segment *s)
+int seg_all_cut(const seg_layout *layout, const seg_segment *s)
 {
     for (int32_t i = 0; i < s->edge_count; ++i)
         if (!layout->edge_cut[s->edges[i]])
@@ -307,17 +313,17 @@ static int all_cut(const seg_layout *layout, const seg_segment *s)
 static pz_status try_remove(seg_layout *layout, const seg_segment *s, int *removed, pz_ctx *ctx)
 {
     *removed = 0;
-    edge_set set;
-    if (!edge_set_make(layout, s->edges, s->edge_count, &set))
+    seg_edge_set set;
+    if (!seg_edge_set_make(layout, s->edges, s->edge_count, &set))
         return nomem(ctx);
     int worth = 0;
-    pz_status status = leaves_stub(layout, &set) ? PZ_OK : worth_trying(layout, &set, &worth, ctx);
+    pz_status status = seg_leaves_stub(layout, &set) ? PZ_OK : worth_trying(layout, &set, &worth, ctx);
     if (!status && worth) {
         int ok = 0;
-        edge_set_apply(layout, &set, 0);
+        seg_edge_set_apply(layout, &set, 0);
         status = panels_ok(layout, &set, &ok, ctx);
         if (!status && !ok) {
-            edge_set_apply(layout, &set, 1);
+            seg_edge_set_apply(layout, &set, 1);
             status = seg_label_panels(layout, ctx);
         }
         *removed = ok && !status;
@@ -347,7 +353,7 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
         int32_t before = *removed;
         for (int32_t i = 0; i < segments.count && !status; ++i) {
             const seg_segment *s = segments.items + order[i].segment;
-            if (s->sketch || !all_cut(layout, s))
+            if (s->sketch || !seg_all_cut(layout, s))
                 continue;
             if ((status = pz_check_cancel(ctx, "segment")))
                 break;
@@ -442,6 +448,27 @@ static double merged_extent(const seg_layout *layout, int32_t a, int32_t b)
     return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
+/* 1 when the two panels on the sides of edge e, joined, make a band round the body (segment/preference.c). */
+static int merged_is_band(const seg_layout *layout, int32_t e)
+{
+    const pz_topology *t = layout->topology;
+    int32_t a = layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])];
+    int32_t b = layout->face_panel[pz_he_face(t->edge_halfedge[2 * e + 1])];
+    int32_t na = layout->panel_offsets[a + 1] - layout->panel_offsets[a];
+    int32_t nb = layout->panel_offsets[b + 1] - layout->panel_offsets[b];
+    int32_t *faces = malloc(((size_t)na + nb + 1) * sizeof(int32_t));
+    if (!faces)
+        return 0;
+    memcpy(faces, layout->panel_faces + layout->panel_offsets[a], (size_t)na * sizeof(int32_t));
+    memcpy(faces + na, layout->panel_faces + layout->panel_offsets[b], (size_t)nb * sizeof(int32_t));
+    double area = 0;
+    for (int32_t i = 0; i < na + nb; ++i)
+        area += layout->frame.face_area[faces[i]];
+    int band = seg_wrap_is_band(layout, seg_wrap_degrees(layout, faces, na + nb), area);
+    free(faces);
+    return band;
+}
+
 static double edges_length(const seg_layout *layout, const int32_t *edges, int32_t n)
 {
     double sum = 0;
@@ -457,7 +484,7 @@ static double edges_length(const seg_layout *layout, const int32_t *edges, int32
 /* A segment can become a dart when it is open, long enough and neither end is a tip already. */
 static int dart_candidate(const seg_layout *layout, const seg_segment *s)
 {
-    if (s->sketch || s->closed || s->edge_count < 2 * DART_MIN_PIECES || !all_cut(layout, s))
+    if (s->sketch || s->closed || s->edge_count < 2 * DART_MIN_PIECES || !seg_all_cut(layout, s))
         return 0;
     const pz_topology *t = layout->topology;
     int32_t ends[2] = {s->vertices[0], s->vertices[s->edge_count]};
@@ -495,14 +522,14 @@ static void orient_from_low_end(const seg_layout *layout, const seg_segment *s, 
 static pz_status measure_glued(seg_layout *layout, const int32_t *edges, int32_t glued, int32_t probe_edge, int *ok,
                                pz_goal_result *probe, pz_ctx *ctx)
 {
-    edge_set set;
-    if (!edge_set_make(layout, edges, glued, &set))
+    seg_edge_set set;
+    if (!seg_edge_set_make(layout, edges, glued, &set))
         return nomem(ctx);
-    edge_set_apply(layout, &set, 0);
+    seg_edge_set_apply(layout, &set, 0);
     pz_status status = panels_ok(layout, &set, ok, ctx);
     if (!status)
         *probe = layout->panel_goals[layout->face_panel[pz_he_face(layout->topology->edge_halfedge[2 * probe_edge])]];
-    edge_set_apply(layout, &set, 1);
+    seg_edge_set_apply(layout, &set, 1);
     free(set.edges);
     return status;
 }
@@ -542,14 +569,17 @@ static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double
     if (!edges)
         return nomem(ctx);
     orient_from_low_end(layout, s, defect, edges);
-    edge_set whole;
-    if (!edge_set_make(layout, edges, n, &whole)) {
+    seg_edge_set whole;
+    if (!seg_edge_set_make(layout, edges, n, &whole)) {
         free(edges);
         return nomem(ctx);
     }
     int worth = 0;
     pz_status status = worth_trying(layout, &whole, &worth, ctx);
     free(whole.edges);
+    /* A dart joins the two panels into one (with a slit): never into a band round the body. */
+    if (!status && worth && merged_is_band(layout, edges[0]))
+        worth = 0;
     const pz_topology *t = layout->topology;
     double max_leg = 0;
     if (!status && worth) {
@@ -574,11 +604,11 @@ static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double
             break; /* the merged panel's topology does not depend on the dart's length */
     }
     if (!status && best > 0) {
-        edge_set set;
-        if (!edge_set_make(layout, edges, best, &set)) {
+        seg_edge_set set;
+        if (!seg_edge_set_make(layout, edges, best, &set)) {
             status = nomem(ctx);
         } else {
-            edge_set_apply(layout, &set, 0);
+            seg_edge_set_apply(layout, &set, 0);
             free(set.edges);
             *made = 1;
         }
