@@ -116,6 +116,9 @@ pz_status pl_measure_tradeoff(pz_result *result, pz_ctx *ctx)
         return pz_error(ctx, status, "run: out of memory measuring the trade-off");
     if (status != PZ_OK)
         memset(&result->tradeoff, 0, sizeof result->tradeoff); /* not measured */
+    /* The layout itself was flattened for good: its worst strain is the final pattern's, not an estimate. */
+    if (result->tradeoff.count > 0 && result->verdict.judged)
+        result->tradeoff.worst_strain[0] = result->verdict.worst_strain;
     return PZ_OK;
 }
 
@@ -350,6 +353,7 @@ static pz_status piece_strain(const pz_mesh *mesh, const pz_topology *topology, 
     int32_t samples[OUTLOOK_SAMPLES];
     int32_t wanted = sample_vertices(mesh, samples, OUTLOOK_SAMPLES);
     piece_scratch scratch;
+    memset(&scratch, 0, sizeof scratch);
     uint8_t *no_cuts = calloc((size_t)topology->edge_count + 1, 1);
     weighted strains[OUTLOOK_SAMPLES];
     pz_status status = no_cuts && piece_scratch_init(mesh, &scratch) ? PZ_OK : PZ_ERR_NOMEM;

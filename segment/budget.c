@@ -43,7 +43,7 @@ static pz_status nomem(pz_ctx *ctx)
 typedef struct merged_figures {
     uint64_t key;              /* 0: empty slot */
     pz_goal_result goals;
-    double wrap_deg, area;
+    seg_shape shape;
 } merged_figures;
 
 typedef struct merged_memo {
@@ -110,6 +110,7 @@ typedef struct budget_state {
     int threads;
     int32_t most_trials;       /* > 0: flatten at most this many new trials a step, the most promising */
     int32_t max_corners;       /* > 0: merged panels keep this corner bound and are no bands (the trade-off) */
+    int alone;                 /* 1: a seam is removed without its mirror image (no mirrored merge was valid) */
 } budget_state;
 
 /* ---------------------------------------------------------------- a trial */
@@ -186,7 +187,7 @@ static pz_status evaluate_from_memo(seg_layout *layout, budget_state *state, pz_
     if (!status)
         status = seg_evaluate_panels(layout, NULL, ctx);
     for (int32_t p = 0; p < layout->panel_count && !status; ++p) {
-        merged_figures figures = {keys[p], layout->panel_goals[p], layout->panel_wrap[p], layout->panel_area[p]};
+        merged_figures figures = {keys[p], layout->panel_goals[p], layout->panel_shape[p]};
         if (!memo_find(&state->memo, keys[p]) && !memo_store(&state->memo, &figures))
             status = nomem(ctx);
     }
@@ -364,10 +365,7 @@ static pz_status flatten_unknown(seg_layout *layout, budget_state *state, merged
             break;
         merged_panel *m = panels + todo[i];
         m->figures.key = m->key;
-        m->figures.area = 0;
-        for (int32_t k = 0; k < m->count; ++k)
-            m->figures.area += layout->frame.face_area[m->faces[k]];
-        m->figures.wrap_deg = seg_wrap_degrees(layout, m->faces, m->count);
+        seg_faces_shape(layout, m->faces, m->count, &m->figures.shape);
         m->known = 1;
         if (!memo_store(&state->memo, &m->figures))
             status = nomem(ctx);
@@ -402,7 +400,7 @@ static void layout_figures(const seg_layout *layout, const uint8_t *skip, double
 
 static int figures_band(const seg_layout *layout, const merged_figures *f)
 {
-    return seg_wrap_is_band(layout, f->wrap_deg, f->area);
+    return seg_shape_is_band(layout, &f->shape);
 }
 
 /* The trial of segment i's set from its merged panels [first, last). */
@@ -442,6 +440,16 @@ static void judge_trial(const seg_layout *layout, const budget_state *state, con
 }
 
 /* One merge: the best valid trial, applied (its merged panels' figures put in place). *merged = 0: none. */
+/* The segment's edges alone, without their mirror images. 0 when out of memory. */
+static int edge_set_alone(const seg_segment *s, seg_edge_set *out)
+{
+    out->count = s->edge_count;
+    out->edges = malloc((size_t)s->edge_count * sizeof(int32_t) + 1);
+    if (out->edges)
+        memcpy(out->edges, s->edges, (size_t)s->edge_count * sizeof(int32_t));
+    return out->edges != NULL;
+}
+
 /* A trial's promise before flattening: bands last, then the worst strain of the panels it joins, then area. */
 typedef struct trial_promise {
     int32_t trial;
@@ -479,11 +487,10 @@ static int keep_promising(const seg_layout *layout, merged_panel *panels, const 
         for (int32_t j = first[i]; j < first[i + 1]; ++j) {
             merged_panel *m = panels + j;
             all_known &= m->known;
-            double area = 0;
-            for (int32_t k = 0; k < m->count; ++k)
-                area += layout->frame.face_area[m->faces[k]];
-            p.area += area;
-            p.band |= seg_wrap_is_band(layout, seg_wrap_degrees(layout, m->faces, m->count), area);
+            seg_shape shape;
+            seg_faces_shape(layout, m->faces, m->count, &shape);
+            p.area += shape.area;
+            p.band |= seg_shape_is_band(layout, &shape);
             for (int32_t k = 0; k < m->set->count; ++k)
                 for (int side = 0; side < 2; ++side) {
                     int32_t h = t->edge_halfedge[2 * m->set->edges[k] + side];
@@ -525,7 +532,7 @@ static pz_status merge_step(seg_layout *layout, budget_state *state, int32_t *me
         if (s->sketch || !seg_all_cut(layout, s) || g < 0 ||
             layout->face_panel[pz_he_face(h)] == layout->face_panel[pz_he_face(g)])
             continue; /* kept by the designer, or joins a panel with itself: no piece fewer */
-        if (!seg_edge_set_make(layout, s->edges, s->edge_count, sets + i))
+        if (!(state->alone ? edge_set_alone(s, sets + i) : seg_edge_set_make(layout, s->edges, s->edge_count, sets + i)))
             status = nomem(ctx);
         else if (seg_leaves_stub(layout, sets + i))
             continue;
@@ -648,6 +655,12 @@ static pz_status merge_down(seg_layout *layout, int32_t pieces, double stop_stra
         merge_trial chosen;
         memset(&chosen, 0, sizeof chosen);
         status = merge_step(layout, &state, &merged, &chosen, ctx);
+        /* The budget before symmetry: when no mirrored pair of seams can go, one seam alone (a tube opened by
+         * one seam is no mirror image of itself unless the seam lies on the plane). */
+        if (!status && !merged && layout->symmetry.found && !state.alone && record == NULL) {
+            state.alone = 1;
+            status = merge_step(layout, &state, &merged, &chosen, ctx);
+        }
         if (status || !merged)
             break;
         if (record && record->count < PZ_TRADEOFF_STEPS) {

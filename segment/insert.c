@@ -38,6 +38,8 @@
 #define PREFERENCE_WEIGHT 0.75
 /* A candidate preferred less than this is a seam of last resort: a removal pass comes first. */
 #define WEAK_PREFERENCE 0.5
+/* A band is split by a path at least this upright (mean |tangent . up|): one across it leaves two bands. */
+#define UPRIGHT 0.5
 /* A sketch end this near the border or a seam (share of the bounding-box diagonal) is carried on to it:
  * the tolerance within which seamscore.py takes a seam for the designer's. A curve longer than
  * SKETCH_SEAM_LENGTH of the diagonal is a seam (a dart is a fraction of its piece): both its ends reach the
@@ -50,17 +52,18 @@ static pz_status nomem(pz_ctx *ctx)
     return pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
 }
 
-/* A panel the insertion splits: it misses a goal, or it is a band round the body (segment/preference.c). */
+/* A panel the insertion splits: 1 when it misses a goal, 2 when it is only a band round the body
+ * (segment/preference.c), 0 otherwise. */
 static int needs_split(const seg_layout *layout, int32_t p)
 {
-    return layout->panel_goals[p].failures != 0 || seg_panel_is_band(layout, p);
+    return layout->panel_goals[p].failures != 0 ? 1 : seg_panel_is_band(layout, p) ? 2 : 0;
 }
 
 static int32_t failing_panels(const seg_layout *layout)
 {
     int32_t failing = 0;
     for (int32_t p = 0; p < layout->panel_count; ++p)
-        failing += needs_split(layout, p);
+        failing += needs_split(layout, p) != 0;
     return failing;
 }
 
@@ -104,8 +107,11 @@ static pz_status add_path(seg_layout *layout, const pz_trace_path *path, int ske
     return PZ_OK;
 }
 
-/* 1 when the path has an uncut interior edge inside a failing panel. */
-static int splits_failing(const seg_layout *layout, const pz_trace_path *path)
+/*
+ * 1 when the path has an uncut interior edge inside a panel to split: one that misses a goal, or, for a path
+ * running up and down (`upright`: a horizontal cut across a band leaves two bands), a band.
+ */
+static int splits_failing(const seg_layout *layout, const pz_trace_path *path, int upright)
 {
     const pz_topology *t = layout->topology;
     int32_t n = path->vertex_count, edges = path->closed ? n : n - 1;
@@ -113,7 +119,8 @@ static int splits_failing(const seg_layout *layout, const pz_trace_path *path)
         int32_t e = seg_edge_between(layout, path->vertices[i], path->vertices[(i + 1) % n]);
         if (e < 0 || layout->edge_cut[e] || t->edge_halfedge[2 * e + 1] < 0)
             continue;
-        if (needs_split(layout, layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]))
+        int why = needs_split(layout, layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]);
+        if (why == 1 || (why == 2 && upright))
             return 1;
     }
     return 0;
@@ -270,12 +277,31 @@ static pz_status make_candidates(seg_layout *layout, pz_trace_paths *traced, seg
     return status;
 }
 
-/* 1 when some usable candidate (or its mirror) splits a failing panel: otherwise no distance is needed. */
+/* 1 when a piece budget is set, the panels are at least that many and every one is a disk. */
+static int budget_reached(const seg_layout *layout)
+{
+    int32_t budget = layout->options->max_pieces;
+    if (budget <= 0 || layout->panel_count < budget)
+        return 0;
+    for (int32_t p = 0; p < layout->panel_count; ++p)
+        if (layout->panel_goals[p].failures & PZ_GOAL_NOT_DISK)
+            return 0;
+    return 1;
+}
+
+/* 1 when candidate c (or its mirror image) splits a panel to split. */
+static int helps(const seg_layout *layout, const seg_candidate *c)
+{
+    int upright = c->preference.vertical >= UPRIGHT;
+    return splits_failing(layout, &c->path, upright) ||
+           (c->mirror.vertex_count && splits_failing(layout, &c->mirror, upright));
+}
+
+/* 1 when some usable candidate helps: otherwise no distance is needed. */
 static int any_helpful(const seg_layout *layout, const seg_candidate *candidates, int32_t count)
 {
     for (int32_t i = 0; i < count; ++i)
-        if (candidates[i].usable && (splits_failing(layout, &candidates[i].path) ||
-                                     (candidates[i].mirror.vertex_count && splits_failing(layout, &candidates[i].mirror))))
+        if (candidates[i].usable && helps(layout, candidates + i))
             return 1;
     return 0;
 }
@@ -327,7 +353,7 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
             seg_candidate *c = candidates + i;
             if (!c->usable)
                 continue;
-            if (!splits_failing(layout, &c->path) && !(c->mirror.vertex_count && splits_failing(layout, &c->mirror)))
+            if (!helps(layout, c))
                 continue;
             double d = pz_trace_path_mean_distance(&c->path, distance);
             int strong = c->preference.score >= WEAK_PREFERENCE;
@@ -345,6 +371,10 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
             best_distance = d;
         }
         if (best < 0)
+            break;
+        /* With a piece budget, the seams beyond the garment's own structure stop at the budget once every
+         * panel is a disk: the budget merges down, and strain is what it trades. */
+        if (!best_strong && budget_reached(layout))
             break;
         /* Before the first seam a pattern maker would not draw, the redundant cuts go (small pieces left
          * between parallel seams, their junctions): they can be why a large panel fails on corners. Once:
@@ -666,13 +696,14 @@ pz_status seg_insert_all(seg_layout *layout, pz_segment_result *result, pz_ctx *
     if (!status)
         status = insert_greedy(layout, candidates, count, &inserted, ctx);
     candidates_clear(candidates, count);
-    for (int32_t depth = 0; !status && depth < layout->max_depth && failing_panels(layout); ++depth) {
+    for (int32_t depth = 0; !status && depth < layout->max_depth && failing_panels(layout) && !budget_reached(layout);
+         ++depth) {
         int32_t more = 0;
         status = recurse_failing(layout, &more, ctx);
         if (!more)
             break;
     }
-    if (!status && goal_failing_panels(layout))
+    if (!status && goal_failing_panels(layout) && !budget_reached(layout))
         status = seg_fallback_cuts(layout, &inserted, ctx);
     result->insert_ms = 1e3 * (pz_seconds() - start);
     return status;

@@ -59,6 +59,7 @@ typedef struct seg_frame {
     double diagonal;         /* of the bounding box */
     double total_area;
     double mean_radius;      /* area-weighted mean distance of the faces from the vertical axis through centre */
+    int torso;               /* 1: 2 pi mean_radius exceeds the height: a body round the axis, whose bands split */
     double *face_area;       /* face_count */
 } seg_frame;
 
@@ -90,7 +91,7 @@ typedef struct seg_layout {
     int32_t *panel_faces;    /* face_count, each panel's faces increasing */
     pz_goal_result *panel_goals;
     uint8_t *panel_evaluated;
-    double *panel_area, *panel_wrap; /* per panel, set with its evaluation (seg_panel_shape) */
+    struct seg_shape *panel_shape;   /* per panel, set with its evaluation (seg_panel_shape) */
     seg_frame frame;
     pz_segment_cache *cache;     /* options->cache, or own_cache */
     pz_segment_cache own_cache;
@@ -153,14 +154,18 @@ pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx);
 /* preference.c: the pattern maker's preferences (docs/segment.md, "Where seams go"). */
 pz_status seg_frame_init(seg_layout *layout, pz_ctx *ctx);
 void seg_frame_clear(seg_frame *frame);
-/* How far (degrees, 0..360) the faces wrap round the vertical axis through the frame's centre. */
-double seg_wrap_degrees(const seg_layout *layout, const int32_t *faces, int32_t count);
-/* Area and wrap of panel p into panel_area / panel_wrap (seg_evaluate_panels calls it). */
+/* What makes a set of faces a band round the body: its area (mm^2) and, for the large ones, how far it wraps
+ * round the vertical axis through the frame's centre (degrees), its length round that axis and its height. */
+typedef struct seg_shape {
+    double area, wrap_deg, girth, height;
+} seg_shape;
+void seg_faces_shape(const seg_layout *layout, const int32_t *faces, int32_t count, seg_shape *out);
+/* 1 for a large set of faces wrapped round the body, longer round it than high (a tube or C round the torso or
+ * the hips; not a collar, a cuff, a sleeve or a leg): the layout splits it. */
+int seg_shape_is_band(const seg_layout *layout, const seg_shape *shape);
+/* Panel p's shape into panel_shape[p] (seg_evaluate_panels calls it), and the test on it. */
 void seg_panel_shape(seg_layout *layout, int32_t p);
-/* 1 when panel p is a large panel wrapped round the body (a tube or C round the torso): the layout splits it. */
 int seg_panel_is_band(const seg_layout *layout, int32_t p);
-/* The same test for faces of that wrap (degrees) and area (mm^2). */
-int seg_wrap_is_band(const seg_layout *layout, double wrap_deg, double area);
 /* A candidate's preference, its parts and the score they make (0..1). */
 typedef struct seg_preference {
     double vertical;     /* length-weighted mean |tangent . up| */

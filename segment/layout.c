@@ -357,8 +357,7 @@ static void layout_free(seg_layout *layout)
     free(layout->label_spare);
     free(layout->panel_goals);
     free(layout->panel_evaluated);
-    free(layout->panel_area);
-    free(layout->panel_wrap);
+    free(layout->panel_shape);
     seg_frame_clear(&layout->frame);
     free(layout->own_cache.entries);
     for (int32_t t = 0; layout->goal_scratch && t < layout->threads; ++t)

@@ -33,8 +33,10 @@
 
 /* A panel wrapping further than this round the vertical axis through the centre is a band ... */
 #define BAND_WRAP_DEG 240.0
-/* ... when it holds more than this share of the garment's area: smaller ones are collars, cuffs and
- * waistbands, which pattern makers do cut as bands. */
+/* ... when it holds more than this share of the garment's area (smaller ones are collars, cuffs and
+ * waistbands, which pattern makers do cut as bands) and its length round the axis exceeds its height, on a
+ * garment whose body round that axis is a torso (wider round than high: not a lone sleeve or leg, which is
+ * cut in one piece). */
 #define BAND_AREA_SHARE 0.10
 /* Faces nearer the vertical axis than this share of the mean radius have no reliable angle round it. */
 #define WRAP_MIN_RADIUS 0.3
@@ -161,6 +163,8 @@ pz_status seg_frame_init(seg_layout *layout, pz_ctx *ctx)
         radius += frame->face_area[f] * pz_vec3_norm(q);
     }
     frame->mean_radius = frame->total_area > 0 ? radius / frame->total_area : 0;
+    /* A body round the vertical axis wider round than high (a torso, hips): a lone sleeve or leg is not one. */
+    frame->torso = 2 * PZ_PI * frame->mean_radius > fabs(pz_vec3_dot(hi, frame->up) - pz_vec3_dot(lo, frame->up));
     return PZ_OK;
 }
 
@@ -172,21 +176,25 @@ void seg_frame_clear(seg_frame *frame)
 
 /* ---------------------------------------------------------------- bands */
 
-double seg_wrap_degrees(const seg_layout *layout, const int32_t *faces, int32_t count)
+/* How far (degrees) the faces wrap round the vertical axis through the centre, and their mean radius. */
+static double wrap_degrees(const seg_layout *layout, const int32_t *faces, int32_t count, double area,
+                           double *mean_radius)
 {
     const seg_frame *frame = &layout->frame;
-    double bins[WRAP_BINS] = {0}, area = 0;
+    double bins[WRAP_BINS] = {0}, radius = 0;
     for (int32_t i = 0; i < count; ++i) {
         double c[3], q[3];
         face_centroid(layout->mesh, faces[i], c);
         horizontal_offset(frame, c, q);
-        area += frame->face_area[faces[i]];
-        if (pz_vec3_norm(q) < WRAP_MIN_RADIUS * frame->mean_radius)
+        double r = pz_vec3_norm(q), w = frame->face_area[faces[i]];
+        radius += w * r;
+        if (r < WRAP_MIN_RADIUS * frame->mean_radius)
             continue;
         double angle = atan2(pz_vec3_dot(q, frame->front), pz_vec3_dot(q, frame->side));
         int bin = (int)floor((angle + PZ_PI) / (2 * PZ_PI) * WRAP_BINS);
-        bins[bin < 0 ? 0 : bin >= WRAP_BINS ? WRAP_BINS - 1 : bin] += frame->face_area[faces[i]];
+        bins[bin < 0 ? 0 : bin >= WRAP_BINS ? WRAP_BINS - 1 : bin] += w;
     }
+    *mean_radius = area > 0 ? radius / area : 0;
     /* The longest run of uncovered bins, round the circle. */
     int longest = 0, run = 0;
     for (int i = 0; i < 2 * WRAP_BINS; ++i) {
@@ -198,26 +206,41 @@ double seg_wrap_degrees(const seg_layout *layout, const int32_t *faces, int32_t 
     return 360.0 * (WRAP_BINS - longest) / WRAP_BINS;
 }
 
-int seg_wrap_is_band(const seg_layout *layout, double wrap_deg, double area)
+void seg_faces_shape(const seg_layout *layout, const int32_t *faces, int32_t count, seg_shape *out)
 {
-    return wrap_deg > BAND_WRAP_DEG && area > BAND_AREA_SHARE * layout->frame.total_area;
+    memset(out, 0, sizeof *out);
+    double low = INFINITY, high = -INFINITY;
+    for (int32_t i = 0; i < count; ++i)
+        out->area += layout->frame.face_area[faces[i]];
+    if (!(out->area > BAND_AREA_SHARE * layout->frame.total_area))
+        return; /* too small to be a band: the rest is not needed */
+    for (int32_t i = 0; i < count; ++i) {
+        double c[3];
+        face_centroid(layout->mesh, faces[i], c);
+        double h = pz_vec3_dot(c, layout->frame.up);
+        low = fmin(low, h), high = fmax(high, h);
+    }
+    double radius = 0;
+    out->wrap_deg = wrap_degrees(layout, faces, count, out->area, &radius);
+    out->girth = 2 * PZ_PI * radius * out->wrap_deg / 360;
+    out->height = high - low;
+}
+
+int seg_shape_is_band(const seg_layout *layout, const seg_shape *shape)
+{
+    return layout->frame.torso && shape->wrap_deg > BAND_WRAP_DEG && shape->area > BAND_AREA_SHARE * layout->frame.total_area &&
+           shape->girth > shape->height;
 }
 
 int seg_panel_is_band(const seg_layout *layout, int32_t p)
 {
-    return seg_wrap_is_band(layout, layout->panel_wrap[p], layout->panel_area[p]);
+    return seg_shape_is_band(layout, layout->panel_shape + p);
 }
 
 void seg_panel_shape(seg_layout *layout, int32_t p)
 {
-    const int32_t *faces = layout->panel_faces + layout->panel_offsets[p];
-    int32_t count = layout->panel_offsets[p + 1] - layout->panel_offsets[p];
-    double area = 0;
-    for (int32_t i = 0; i < count; ++i)
-        area += layout->frame.face_area[faces[i]];
-    layout->panel_area[p] = area;
-    layout->panel_wrap[p] = area > BAND_AREA_SHARE * layout->frame.total_area ? seg_wrap_degrees(layout, faces, count)
-                                                                                 : 0;
+    seg_faces_shape(layout, layout->panel_faces + layout->panel_offsets[p],
+                    layout->panel_offsets[p + 1] - layout->panel_offsets[p], layout->panel_shape + p);
 }
 
 /* ---------------------------------------------------------------- junctions */

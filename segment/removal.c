@@ -461,10 +461,9 @@ static int merged_is_band(const seg_layout *layout, int32_t e)
         return 0;
     memcpy(faces, layout->panel_faces + layout->panel_offsets[a], (size_t)na * sizeof(int32_t));
     memcpy(faces + na, layout->panel_faces + layout->panel_offsets[b], (size_t)nb * sizeof(int32_t));
-    double area = 0;
-    for (int32_t i = 0; i < na + nb; ++i)
-        area += layout->frame.face_area[faces[i]];
-    int band = seg_wrap_is_band(layout, seg_wrap_degrees(layout, faces, na + nb), area);
+    seg_shape shape;
+    seg_faces_shape(layout, faces, na + nb, &shape);
+    int band = seg_shape_is_band(layout, &shape);
     free(faces);
     return band;
 }

@@ -70,9 +70,10 @@ static void check_files(const readers *r, const char *dir, const pz_pieces *piec
         reader_passes(command, log, what);
     }
     if (r->poppler) {
-        /* The sheet whole at 2 dpi (it can be metres wide), the tiled PDF's cover and first tiles at 20. */
+        /* The sheet whole at 2 dpi (it can be metres wide: over 5 m it is cut into several 1:1 pages, docs/export.md,
+         * as the wetsuit's 24 pieces can be), the tiled PDF's cover and first tiles at 20. */
         snprintf(command, sizeof command,
-                 "pdfinfo '%s/pattern.pdf' | grep -q '^Pages: *1$' && pdftoppm -r 2 '%s/pattern.pdf' '%s/sheet' && "
+                 "pdfinfo '%s/pattern.pdf' | grep -q '^Pages: *[1-9]' && pdftoppm -r 2 '%s/pattern.pdf' '%s/sheet' && "
                  "pdfinfo '%s/pattern-tiled.pdf' | grep -q '^Pages: *[0-9]' && "
                  "pdftoppm -r 20 -f 1 -l 3 '%s/pattern-tiled.pdf' '%s/tile'",
                  dir, dir, dir, dir, dir, dir);
