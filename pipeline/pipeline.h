@@ -248,6 +248,7 @@ typedef struct pz_result {
     pz_segment_result *segment;      /* the automatic layout: symmetry, panels, darts, counts */
     pz_prepare_result *prepared;     /* the automatic preparation's report (its mesh moved to `garment`) */
     pz_truing_result truing;
+    int truing_dropped;              /* 1: the trued seams missed the goals and the layout was flattened untrued */
     int32_t field_singularities;
     int32_t verdict_rounds;          /* layouts made again because the joint flattening rejected panels */
     int32_t vetoed_panels;

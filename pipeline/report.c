@@ -569,8 +569,9 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
     ok &= add_plain_number(object, "field_singularities", result->field_singularities);
     ok &= add_plain_number(object, "verdict_rounds", result->verdict_rounds);
     cJSON *truing = cJSON_AddObjectToObject(object, "truing");
-    ok &= truing != NULL && cJSON_AddBoolToObject(truing, "on", options->truing) != NULL;
-    if (truing && options->truing) {
+    ok &= truing != NULL && cJSON_AddBoolToObject(truing, "on", options->truing && !result->truing_dropped) != NULL;
+    ok &= truing != NULL && cJSON_AddBoolToObject(truing, "dropped", result->truing_dropped) != NULL;
+    if (truing && options->truing && !result->truing_dropped) {
         const pz_truing_result *t = &result->truing;
         ok &= add_plain_number(truing, "moved_vertices", t->moved_vertices);
         ok &= add_plain_number(truing, "relaxed_vertices", t->relaxed_vertices);

@@ -262,9 +262,22 @@ static pz_status make_candidates(seg_layout *layout, pz_trace_paths *traced, seg
             }
         }
         status = seg_preference_measure(layout, &c->path, girth, &c->preference, ctx);
-        c->weight = (1 - PREFERENCE_WEIGHT + PREFERENCE_WEIGHT * c->preference.score) * (0.5 + 0.5 * c->preference.alignment);
         ++kept;
     }
+    /* One junction per limb, then the insertion key's weights. */
+    const pz_trace_path **loops = malloc(((size_t)kept + 1) * sizeof *loops);
+    seg_preference **prefs = malloc(((size_t)kept + 1) * sizeof *prefs);
+    if (!status && (!loops || !prefs))
+        status = nomem(ctx);
+    for (int32_t i = 0; !status && i < kept; ++i)
+        loops[i] = &candidates[i].path, prefs[i] = &candidates[i].preference;
+    if (!status)
+        status = seg_junctions_outermost(layout, loops, prefs, kept, ctx);
+    free(loops);
+    free(prefs);
+    for (int32_t i = 0; !status && i < kept; ++i)
+        candidates[i].weight = (1 - PREFERENCE_WEIGHT + PREFERENCE_WEIGHT * candidates[i].preference.score) *
+                               (0.5 + 0.5 * candidates[i].preference.alignment);
     free(mark);
     seg_girth_scratch_free(girth);
     *out = candidates;
@@ -357,7 +370,7 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
                 continue;
             double d = pz_trace_path_mean_distance(&c->path, distance);
             int strong = c->preference.score >= WEAK_PREFERENCE;
-            double key = strong ? c->weight * fmin(d, far_enough) : d;
+            double key = c->weight * fmin(d, strong ? far_enough : layout->frame.diagonal);
             if (strong < best_strong || (strong == best_strong && !(key > best_key || (key == best_key && d > best_distance))))
                 continue;
             if (tangential_to_inserted(layout, &c->path) ||

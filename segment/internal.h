@@ -175,6 +175,7 @@ typedef struct seg_preference {
     double junction;     /* loops: the surface beyond is wider than the loop (0..1, from widening) */
     double alignment;    /* length / cost: 1 on the field's arms */
     int encircles;       /* loops: winds round the vertical axis (round the body, not a limb) */
+    int narrow_side;     /* loops round a limb: the limb's side (0: left of the loop's direction) */
     double score;        /* loops: max(junction, silhouette, centre); border paths max(silhouette, centre,
                             vertical / 2) */
 } seg_preference;
@@ -183,6 +184,10 @@ seg_girth_scratch *seg_girth_scratch_new(const seg_layout *layout);
 void seg_girth_scratch_free(seg_girth_scratch *scratch);
 pz_status seg_preference_measure(const seg_layout *layout, const pz_trace_path *path, seg_girth_scratch *scratch,
                                  seg_preference *out, pz_ctx *ctx);
+/* One junction per limb: a loop round a limb whose limb side lies inside another junction loop's, with a
+ * junction score no higher, loses its junction score (the limb meets the body at the other). */
+pz_status seg_junctions_outermost(const seg_layout *layout, const pz_trace_path *const *loops, seg_preference **prefs,
+                                  int32_t count, pz_ctx *ctx);
 
 /* removal.c */
 pz_status seg_segments_build(const seg_layout *layout, seg_segments *out, pz_ctx *ctx);

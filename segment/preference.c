@@ -466,6 +466,7 @@ pz_status seg_preference_measure(const seg_layout *layout, const pz_trace_path *
             /* Round a limb: the body beyond is wider than the limb's tube on this side, and the limb is a tube
              * (its girth near the loop's length; a loop that cuts off a cap narrowing fast is no junction). */
             double narrow = fmin(girth[0], girth[1]);
+            out->narrow_side = girth[0] <= girth[1] ? 0 : 1;
             out->widening = fmax(girth[0], girth[1]) / fmax(narrow, layout->mean_edge);
             out->junction = narrow >= TUBE_MIN * length ? ramp(out->widening, JUNCTION_NONE, JUNCTION_FULL) : 0;
         }
@@ -474,4 +475,99 @@ pz_status seg_preference_measure(const seg_layout *layout, const pz_trace_path *
         out->score = fmax(0.5 * out->vertical, fmax(out->silhouette, CENTRE_RANK * out->centre));
     }
     return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- one junction per limb */
+
+/*
+ * The faces on one side of a closed loop (0: the left of its direction), flooded across every edge but the
+ * loop's, into `mark` (face_count bits); the side's area into *area. 0 when out of memory.
+ */
+static int flood_side(const seg_layout *layout, const pz_trace_path *loop, int side, uint8_t *mark, double *area,
+                      int32_t *stack, uint8_t *blocked)
+{
+    const pz_topology *t = layout->topology;
+    int32_t n = loop->vertex_count, top = 0;
+    *area = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t e = seg_edge_between(layout, loop->vertices[i], loop->vertices[(i + 1) % n]);
+        if (e >= 0)
+            blocked[e] = 1;
+    }
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t e = seg_edge_between(layout, loop->vertices[i], loop->vertices[(i + 1) % n]);
+        for (int k = 0; e >= 0 && k < 2; ++k) {
+            int32_t h = t->edge_halfedge[2 * e + k];
+            if (h < 0 || (pz_he_from(t, h) == loop->vertices[i] ? 0 : 1) != side)
+                continue;
+            int32_t f = pz_he_face(h);
+            if (!(mark[f >> 3] & (1u << (f & 7))))
+                mark[f >> 3] |= (uint8_t)(1u << (f & 7)), stack[top++] = f;
+        }
+    }
+    while (top > 0) {
+        int32_t f = stack[--top];
+        *area += layout->frame.face_area[f];
+        for (int k = 0; k < 3; ++k) {
+            int32_t g = t->twin[3 * f + k];
+            if (g < 0 || blocked[t->halfedge_edge[3 * f + k]])
+                continue;
+            int32_t next = pz_he_face(g);
+            if (!(mark[next >> 3] & (1u << (next & 7))))
+                mark[next >> 3] |= (uint8_t)(1u << (next & 7)), stack[top++] = next;
+        }
+    }
+    for (int32_t i = 0; i < n; ++i) {
+        int32_t e = seg_edge_between(layout, loop->vertices[i], loop->vertices[(i + 1) % n]);
+        if (e >= 0)
+            blocked[e] = 0;
+    }
+    return 1;
+}
+
+pz_status seg_junctions_outermost(const seg_layout *layout, const pz_trace_path *const *loops, seg_preference **prefs,
+                                  int32_t count, pz_ctx *ctx)
+{
+    int32_t limbs = 0, faces = layout->topology->face_count;
+    int32_t *which = malloc(((size_t)count + 1) * sizeof(int32_t));
+    if (!which)
+        return nomem(ctx);
+    for (int32_t i = 0; i < count; ++i)
+        if (loops[i]->closed && prefs[i]->junction > 0 && !prefs[i]->encircles)
+            which[limbs++] = i;
+    size_t bytes = ((size_t)faces + 7) / 8;
+    uint8_t *marks = calloc((size_t)limbs * bytes + 1, 1);
+    double *areas = malloc(((size_t)limbs + 1) * sizeof(double));
+    int32_t *stack = malloc(((size_t)faces + 1) * sizeof(int32_t));
+    uint8_t *blocked = calloc((size_t)layout->topology->edge_count + 1, 1);
+    pz_status status = marks && areas && stack && blocked ? PZ_OK : nomem(ctx);
+    for (int32_t a = 0; a < limbs && !status; ++a)
+        flood_side(layout, loops[which[a]], prefs[which[a]]->narrow_side, marks + a * bytes, areas + a, stack, blocked);
+    /* A junction whose limb side lies inside another's (nearer the limb's free end), no stronger than it, is no
+     * junction: a limb meets the body once (the armhole, not round the elbow; the top of the leg, not the knee). */
+    const pz_topology *t = layout->topology;
+    for (int32_t b = 0; b < limbs && !status; ++b) {
+        const pz_trace_path *loop = loops[which[b]];
+        int32_t e = seg_edge_between(layout, loop->vertices[0], loop->vertices[1]), f = -1;
+        for (int k = 0; e >= 0 && k < 2 && f < 0; ++k) {
+            int32_t h = t->edge_halfedge[2 * e + k];
+            if (h >= 0 && (pz_he_from(t, h) == loop->vertices[0] ? 0 : 1) == prefs[which[b]]->narrow_side)
+                f = pz_he_face(h);
+        }
+        for (int32_t a = 0; a < limbs && f >= 0; ++a) {
+            if (a == b || !(areas[a] > areas[b]) || prefs[which[a]]->junction < prefs[which[b]]->junction ||
+                !(marks[a * bytes + (f >> 3)] & (1u << (f & 7))))
+                continue;
+            seg_preference *p = prefs[which[b]];
+            p->junction = 0;
+            p->score = fmax(p->silhouette, CENTRE_RANK * p->centre);
+            break;
+        }
+    }
+    free(which);
+    free(marks);
+    free(areas);
+    free(stack);
+    free(blocked);
+    return status;
 }

@@ -153,7 +153,8 @@ report_checks "run bodice: trade-off" bodice2 \
     "d['tradeoff_sequence'][0]['pieces'] == d['summary']['panel_count'] and all(a['pieces'] > b['pieces'] for a, b in zip(d['tradeoff_sequence'], d['tradeoff_sequence'][1:]))" \
     "the area share over S is not 0 although every triangle is within S" \
     "d['summary']['area_over_max_strain'] == 0 and d['summary']['max_abs_strain'] <= 0.05" \
-    "no outlook" "d['strain_outlook']['reachable'] is True and d['strain_outlook']['samples'] > 0"
+    "no outlook" "d['strain_outlook']['reachable'] is True and d['strain_outlook']['samples'] > 0" \
+    "truing neither on nor dropped" "d['segmentation']['truing']['on'] is not d['segmentation']['truing']['dropped']"
 check "report.html shows no trade-off" grep -q 'id="tradeoff"' bodice2/report.html
 
 # --max-pieces N: at most N pieces (a mirror pair counts as two), every one a disk flattening injectively;
