@@ -260,6 +260,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
      * own verdict then accepts it as it is (the same flattening: accept_pattern). */
     int stricter = seg->goals.goals.max_strain < seg->defaults.max_strain ||
                    seg->goals.goals.max_corners < seg->defaults.max_corners;
+    int reused = 0;
     /* A piece budget decides the count itself: no looser settings to keep monotone. */
     if (status == PZ_OK && stricter && !seg->ladder_done && seg->options->segment.max_pieces == 0) {
         seg->ladder_done = 1;
@@ -274,6 +275,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
                     (int)seg->rung_count, seg->ladder_ms, (int)seg->seed_panels, (int)seg->segment->panel_count,
                     seg->seeded ? ", seeded with their cuts (its own layout had fewer)" : "");
     } else if (status == PZ_OK && seg->untrued_retry) {
+        reused = 1;
         seg->untrued_retry = 0; /* the same layout on the original surface */
         memset(&seg->truing_result, 0, sizeof seg->truing_result);
     } else if (status == PZ_OK) {
@@ -281,7 +283,8 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         pz_segment_result_free(&seg->segment);
         status = segment_once(seg, garment, topology, sketch, &seg->goals, NULL, ctx, &seg->segment, ctx);
     }
-    seg->segment_ms = pz_elapsed_ms(field_end, pz_seconds());
+    if (!reused)
+        seg->segment_ms = pz_elapsed_ms(field_end, pz_seconds()); /* an untrued retry keeps the layout's time */
     if (status == PZ_OK && seg->options->truing && !seg->truing_dropped) {
         status = pz_segment_true_seams(garment, topology, seg->segment->edge_cut, NULL, &seg->truing_result, ctx);
         if (status == PZ_OK)
