@@ -195,13 +195,14 @@ typedef struct pz_segment_options {
      * (docs/segment.md, "Monotone panel counts"). */
     const uint8_t *seed_cuts;
     /* The piece budget (0: none): at most this many panels (mirror pairs count as two), with the least
-     * strain. The layout is made as usual, then merged down one seam segment at a time, each time the
-     * removal that leaves the least worst strain among those that keep every panel a disk flattening
-     * injectively; corners and S no longer stop a merge (result->budget_met: reached; docs/segment.md,
-     * "A piece budget"). */
+     * strain. The layout is made as usual but for the seams beyond the garment's structure once the budget
+     * is reached, then merged down one seam segment at a time, each time the removal that leaves the least
+     * worst strain among those that keep every panel a disk flattening injectively; corners and S no
+     * longer stop a merge (result->budget_met: reached; docs/segment.md, "A piece budget and the
+     * trade-off"). */
     int32_t max_pieces;
-    /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
-     * each insertion, removal and dart with the current panel count and the worst strain among the
+    /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts", "budget"), called after
+     * each insertion, removal, dart and budget merge with the current panel count and the worst strain among the
      * current panels that have been flattened (0 when none has). The context's progress callback
      * (pz_ctx.progress) is called at the same steps, with the fraction done. */
     void (*on_progress)(void *user, const char *stage, int32_t panel_count, double worst_strain);
