@@ -70,11 +70,20 @@
 #define PZ_CLI_OPT_SIZE (UINT64_C(1) << 39) /* --size NAME: the size printed on every piece */
 #define PZ_CLI_OPT_OUTPUTS (UINT64_C(1) << 40) /* --outputs LIST: the files to write (flatten, run) */
 #define PZ_CLI_OPT_MAX_SEAM_MISMATCH (UINT64_C(1) << 41) /* --max-seam-mismatch R (run) */
-#define PZ_CLI_OPT_MAX_PIECES (UINT64_C(1) << 42) /* --max-pieces N (run) */
+#define PZ_CLI_OPT_MIN_PIECE_WIDTH (UINT64_C(1) << 42) /* --min-piece-width MM (run) */
+#define PZ_CLI_OPT_MIN_PIECE_AREA (UINT64_C(1) << 43) /* --min-piece-area R (run) */
+#define PZ_CLI_OPT_MIN_DART_INTAKE (UINT64_C(1) << 44) /* --min-dart-intake MM (run) */
+#define PZ_CLI_OPT_STRICT (UINT64_C(1) << 45) /* --strict (run; a flag: stored as the value "1") */
+#define PZ_CLI_OPT_MAX_PIECES (UINT64_C(1) << 46) /* --max-pieces N (run) */
+
+/* A command's outcome besides the pz_status codes (main.c maps it to its exit code, docs/cli.md): `run
+ * --strict` wrote its files but the pattern misses its goals. */
+#define PZ_CLI_GOALS_NOT_MET ((pz_status)3)
+#define PZ_CLI_EXIT_GOALS_NOT_MET 3
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 34
+#define PZ_CLI_VALUE_COUNT 38
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;

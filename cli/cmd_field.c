@@ -254,6 +254,8 @@ pz_status pz_cli_field(const pz_cli_args *args, pz_ctx *ctx)
     const char *sketch_path = pz_cli_value(args, PZ_CLI_OPT_SKETCH);
     if (status == PZ_OK && sketch_path)
         status = pz_sketch_read(sketch_path, mesh->unit_scale, &sketch, ctx);
+    if (status == PZ_OK && sketch)
+        status = pz_sketch_check(sketch, mesh, sketch_path, ctx);
     if (status == PZ_OK)
         status = pz_topology_build(mesh, &topology, ctx);
     double read_end = pz_seconds();

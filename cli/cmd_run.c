@@ -27,7 +27,8 @@ const char pz_cli_run_usage[] =
     "           [--seam-allowance MM] [--hem-allowance MM] [--allowances FILE]\n"
     "           [--notch-spacing MM] [--paper a4|letter] [--dxf-strict]\n"
     "           [--fabric-width MM] [--gap MM] [--size NAME] [--outputs LIST]\n"
-    "           [--max-seam-mismatch R] [--units U] [--repair]\n"
+    "           [--max-seam-mismatch R] [--min-piece-width MM] [--min-piece-area R]\n"
+    "           [--min-dart-intake MM] [--strict] [--units U] [--repair]\n"
     "           [--json] [--quiet]\n"
     "\n"
     "Cuts a 3D garment into panels along field-aligned seams, adds darts and\n"
@@ -45,6 +46,12 @@ const char pz_cli_run_usage[] =
     "                       corners and S then give way (default: no budget)\n"
     "  --max-seam-mismatch R  every seam's and dart's two sides within R of their\n"
     "                       length (default 0.005: 0.5%)\n"
+    "  --min-piece-width MM no piece narrower (twice its largest inscribed distance;\n"
+    "                       default 40, 0: off) unless the garment is that narrow\n"
+    "  --min-piece-area R   no piece under R of the garment's area (default 0.01)\n"
+    "                       unless it is a whole part of the garment\n"
+    "  --min-dart-intake MM a dart takes in at least MM at its mouth (default 6)\n"
+    "  --strict             exit 3 when the pattern misses a goal (files written)\n"
     "  --symmetry M         auto (default: detect a mirror plane), off, x, y or z\n"
     "  --darts on|off       insert darts where a seam can be partly closed (default on)\n"
     "  --truing on|off      smooth the seams traced along mesh edges into clean lines\n"
@@ -87,9 +94,35 @@ static pz_status parse_on_off(const char *option, const char *text, int *value, 
     return parse_word(option, text, words, 2, value, ctx);
 }
 
-/* The goals: --max-corners, --max-strain, --max-seam-mismatch. */
+/* The number of option `flag` (when given) into *value: a finite number in lo..hi, else exit 64. */
+static pz_status parse_bounded(const pz_cli_args *args, uint64_t flag, const char *option, double lo, double hi,
+                               double *value, pz_ctx *ctx)
+{
+    const char *text = pz_cli_value(args, flag);
+    if (!text)
+        return PZ_OK;
+    char *end = NULL;
+    errno = 0;
+    double number = strtod(text, &end);
+    if (end == text || *end || errno == ERANGE || !isfinite(number) || number < lo || number > hi)
+        return pz_error(ctx, PZ_ERR_USAGE, "run: %s: '%s' is not a number in %g..%g", option, text, lo, hi);
+    *value = number;
+    return PZ_OK;
+}
+
+/* The goals: --max-corners, --max-strain, --max-seam-mismatch, and the piece shapes: --min-piece-width,
+ * --min-piece-area, --min-dart-intake (0 turns one off). */
 static pz_status parse_goals(const pz_cli_args *args, pz_goal_options *goals, pz_ctx *ctx)
 {
+    pz_status status = parse_bounded(args, PZ_CLI_OPT_MIN_PIECE_WIDTH, "--min-piece-width", 0, 1000,
+                                     &goals->min_piece_width_mm, ctx);
+    if (status == PZ_OK)
+        status = parse_bounded(args, PZ_CLI_OPT_MIN_PIECE_AREA, "--min-piece-area", 0, 0.5, &goals->min_piece_area, ctx);
+    if (status == PZ_OK)
+        status = parse_bounded(args, PZ_CLI_OPT_MIN_DART_INTAKE, "--min-dart-intake", 0, 1000,
+                               &goals->min_dart_intake_mm, ctx);
+    if (status != PZ_OK)
+        return status;
     const char *text;
     if ((text = pz_cli_value(args, PZ_CLI_OPT_MAX_CORNERS))) {
         char *end = NULL;
@@ -216,6 +249,11 @@ pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx)
     if (status == PZ_OK)
         status = pz_cli_write_result(args, result, read_ms, ctx);
     pz_cli_progress_end(ctx);
+    /* --strict: a pattern that misses its goals is a failure for scripts, once its files are written. */
+    if (status == PZ_OK && pz_cli_value(args, PZ_CLI_OPT_STRICT) && !result->verdict.goals_met) {
+        pz_error(ctx, PZ_ERR_USAGE, "run: goals not met (--strict): %s", result->verdict.reasons);
+        status = PZ_CLI_GOALS_NOT_MET;
+    }
     pz_result_free(&result);
     if (status != PZ_OK)
         rename_message(ctx);

@@ -51,8 +51,9 @@ static const pz_cli_command command_table[] = {
          PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |
          PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |
          PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |
-         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_MAX_PIECES |
-             PZ_CLI_OPT_EXPORT,
+         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_MIN_PIECE_WIDTH |
+         PZ_CLI_OPT_MIN_PIECE_AREA | PZ_CLI_OPT_MIN_DART_INTAKE | PZ_CLI_OPT_STRICT | PZ_CLI_OPT_MAX_PIECES |
+         PZ_CLI_OPT_EXPORT,
      pz_cli_run},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
@@ -117,6 +118,10 @@ static const option_spec option_table[] = {
     {"size", 0, PZ_CLI_OPT_SIZE, 1},
     {"outputs", 0, PZ_CLI_OPT_OUTPUTS, 1},
     {"max-seam-mismatch", 0, PZ_CLI_OPT_MAX_SEAM_MISMATCH, 1},
+    {"min-piece-width", 0, PZ_CLI_OPT_MIN_PIECE_WIDTH, 1},
+    {"min-piece-area", 0, PZ_CLI_OPT_MIN_PIECE_AREA, 1},
+    {"min-dart-intake", 0, PZ_CLI_OPT_MIN_DART_INTAKE, 1},
+    {"strict", 0, PZ_CLI_OPT_STRICT, 0},
     {"max-pieces", 0, PZ_CLI_OPT_MAX_PIECES, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
@@ -136,9 +141,9 @@ static const char global_usage_tail[] =
     "  --quiet        no progress or timings on stderr\n"
     "  --json         machine-readable output on stdout\n"
     "\n"
-    "exit codes: 0 ok, 64 usage, 65 bad or invalid mesh data, 66 cannot open an\n"
-    "input, 70 internal error, 73 cannot create an output, 130 interrupted\n"
-    "(Ctrl-C). On failure exactly one\n"
+    "exit codes: 0 ok, 3 goals not met (run --strict), 64 usage, 65 bad or invalid\n"
+    "mesh data, 66 cannot open an input, 70 internal error, 73 cannot create an\n"
+    "output, 130 interrupted (Ctrl-C). On failure exactly one\n"
     "line `panelize: FILE: problem` is printed on stderr. See docs/cli.md.\n";
 
 static void print_global_usage(FILE *stream)
@@ -414,11 +419,11 @@ static int run_command(const pz_cli_command *command, int argc, char **argv, pz_
         fprintf(stderr, "panelize: %s\n", ctx->error);
     }
     /* A result that could not reach stdout (a full disk, a closed pipe) is a failed run. */
-    if (fflush(stdout) != 0 && status == PZ_OK) {
+    if (fflush(stdout) != 0 && (status == PZ_OK || status == PZ_CLI_GOALS_NOT_MET)) {
         fprintf(stderr, "panelize: %s: cannot write to standard output\n", command->name);
         return pz_status_exit_code(PZ_ERR_CREATE);
     }
-    return pz_status_exit_code(status);
+    return status == PZ_CLI_GOALS_NOT_MET ? PZ_CLI_EXIT_GOALS_NOT_MET : pz_status_exit_code(status);
 }
 
 int main(int argc, char **argv)

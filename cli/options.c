@@ -66,12 +66,14 @@ static pz_status parse_backend_options(const pz_cli_args *args, pz_flatten_optio
     return PZ_OK;
 }
 
-/* One finite number >= minimum for a length option (mm). */
-static pz_status parse_length(const char *option, const char *text, double minimum, double *out, pz_ctx *ctx)
+/* One finite number in minimum .. maximum for a length option (mm): a value beyond any garment's (an
+ * allowance of 1e300) is a mistake, refused here rather than failing deep in the drawing. */
+static pz_status parse_length(const char *option, const char *text, double minimum, double maximum, double *out,
+                              pz_ctx *ctx)
 {
     pz_status status = parse_numbers(option, text, out, 1, ctx);
-    if (status == PZ_OK && *out < minimum)
-        status = pz_error(ctx, PZ_ERR_USAGE, "flatten: %s: %s is below %g mm", option, text, minimum);
+    if (status == PZ_OK && (*out < minimum || *out > maximum))
+        status = pz_error(ctx, PZ_ERR_USAGE, "flatten: %s: %s is not in %g .. %g mm", option, text, minimum, maximum);
     return status;
 }
 
@@ -83,17 +85,17 @@ static pz_status parse_export_options(const pz_cli_args *args, pz_run_options *r
     pz_status status = PZ_OK;
     int hem_given = 0;
     if ((text = pz_cli_value(args, PZ_CLI_OPT_SEAM_ALLOWANCE)))
-        status = parse_length("--seam-allowance", text, 0, &options->seam_allowance_mm, ctx);
+        status = parse_length("--seam-allowance", text, 0, 100, &options->seam_allowance_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_HEM_ALLOWANCE)))
-        status = parse_length("--hem-allowance", text, 0, &options->hem_allowance_mm, ctx), hem_given = 1;
+        status = parse_length("--hem-allowance", text, 0, 100, &options->hem_allowance_mm, ctx), hem_given = 1;
     if (!hem_given)
         options->hem_allowance_mm = options->seam_allowance_mm;
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_NOTCH_SPACING)))
-        status = parse_length("--notch-spacing", text, 1, &options->notch_spacing_mm, ctx);
+        status = parse_length("--notch-spacing", text, 1, 10000, &options->notch_spacing_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_FABRIC_WIDTH)))
-        status = parse_length("--fabric-width", text, 10, &options->fabric_width_mm, ctx);
+        status = parse_length("--fabric-width", text, 10, 10000, &options->fabric_width_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_GAP)))
-        status = parse_length("--gap", text, 0, &options->gap_mm, ctx);
+        status = parse_length("--gap", text, 0, 1000, &options->gap_mm, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_PAPER))) {
         if (strcmp(text, "a4") != 0 && strcmp(text, "letter") != 0 && strcmp(text, "A4") != 0 &&
             strcmp(text, "Letter") != 0)
@@ -190,7 +192,8 @@ pz_status pz_cli_pipeline_options(const pz_cli_args *args, pz_run_options *optio
     if (args->positional_count > 1 && args->pose_path_count > 0)
         return pz_error(ctx, PZ_ERR_USAGE, "flatten: --pose works with one MESH, not %d panel files",
                         args->positional_count);
-    return PZ_OK;
+    /* Before any work: a folder that cannot receive the result is exit 73 at once, not after minutes. */
+    return pz_output_folder_check(args->output_path, ctx);
 }
 
 pz_status pz_cli_outputs(const pz_cli_args *args, unsigned *outputs, pz_ctx *ctx)

@@ -8,10 +8,12 @@
 #include "core/core.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
@@ -164,6 +166,32 @@ static char *duplicate_string(const char *text)
     return copy;
 }
 
+pz_status pz_input_open(const char *path, FILE **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    /* O_NONBLOCK: opening a FIFO with no writer must not wait; it is refused below. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0)
+        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    struct stat info;
+    const char *problem = NULL;
+    if (fstat(fd, &info) != 0)
+        problem = strerror(errno);
+    else if (S_ISDIR(info.st_mode))
+        problem = strerror(EISDIR);
+    else if (!S_ISREG(info.st_mode))
+        problem = "not a regular file (a pipe, a device or a socket)";
+    if (!problem && fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK) != 0)
+        problem = strerror(errno);
+    FILE *file = problem ? NULL : fdopen(fd, "rb");
+    if (!file) {
+        close(fd);
+        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, problem ? problem : strerror(errno));
+    }
+    *out = file;
+    return PZ_OK;
+}
+
 pz_status pz_output_open(pz_output *out, const char *path, const char *mode, pz_ctx *ctx)
 {
     memset(out, 0, sizeof *out);
@@ -192,6 +220,11 @@ pz_status pz_output_commit(pz_output *out, pz_ctx *ctx)
 {
     int failed = ferror(out->file);
     int saved = errno;
+    /* On the disk before the rename, so a crash leaves the old file or the whole new one. */
+    if (!failed && (fflush(out->file) != 0 || (fsync(fileno(out->file)) != 0 && errno != EINVAL))) {
+        failed = 1;
+        saved = errno;
+    }
     if (fclose(out->file) != 0 && !failed) {
         failed = 1;
         saved = errno;

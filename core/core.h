@@ -156,7 +156,8 @@ double pz_round(double value, int decimals);
  *   if ((st = pz_output_open(&out, path, "wb", ctx))) return st;
  *   ... write to out.file ...
  *   return pz_output_commit(&out, ctx);   (or pz_output_abort(&out) on error)
- * pz_output_commit checks write errors (ferror, fclose) and reports
+ * pz_output_commit flushes and syncs the file, checks write errors (ferror,
+ * fsync, fclose) and reports
  * PZ_ERR_CREATE naming PATH. pz_output_abort closes and removes the temporary.
  */
 typedef struct pz_output {
@@ -166,6 +167,14 @@ typedef struct pz_output {
 } pz_output;
 
 pz_status pz_output_open(pz_output *out, const char *path, const char *mode, pz_ctx *ctx);
+
+/**
+ * Opens an input file for reading ("rb"): only a regular file. A directory, a
+ * FIFO, a device or a socket is PZ_ERR_OPEN naming it at once (a FIFO would
+ * block for ever, /dev/zero never end); a missing or unreadable file is
+ * PZ_ERR_OPEN with the system's reason. *out is the caller's to fclose.
+ */
+pz_status pz_input_open(const char *path, FILE **out, pz_ctx *ctx);
 pz_status pz_output_commit(pz_output *out, pz_ctx *ctx);
 void pz_output_abort(pz_output *out);
 

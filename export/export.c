@@ -101,9 +101,10 @@ static pz_status apply_line(char *line, const char *path, int32_t number, const 
 pz_status pz_export_read_allowances(const char *path, const pz_pattern *pattern, double **out, pz_ctx *ctx)
 {
     *out = NULL;
-    FILE *file = fopen(path, "r");
-    if (!file)
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    pz_status opened = pz_input_open(path, &file, ctx);
+    if (opened != PZ_OK)
+        return opened;
     double *allowances = malloc((size_t)pattern->seam_count * sizeof(double) + 1);
     if (!allowances) {
         fclose(file);

@@ -389,6 +389,7 @@ static void set_metadata(cairo_surface_t *surface, const pz_pieces *pieces, cons
  * pages).
  */
 static const double kPageLimit = 5000.0;   /* mm; 14173 pt, under 14400 */
+static const double kMaxTiles = 20000.0;   /* tiles of the home print's grid (a 40 x 30 m sheet of A4) */
 static const double kMinPage = 1250.0;     /* a page cut at a gap is at least this long */
 
 /* An item's extent along one axis. */
@@ -649,6 +650,13 @@ static pz_status tiling_build(const pz_export_inputs *inputs, const sheet *sheet
     out->rows = (int32_t)ceil((sheet->height - kOverlap) / out->step[1]);
     out->columns = out->columns < 1 ? 1 : out->columns;
     out->rows = out->rows < 1 ? 1 : out->rows;
+    /* A pattern no printer would tile (a garment read in the wrong units: 90 m tall) is refused, not drawn
+     * for ever: a home print of more than kMaxTiles pages is not a pattern anyone prints. */
+    if ((double)out->rows * (double)out->columns > kMaxTiles)
+        return pz_error(ctx, PZ_ERR_DATA,
+                        "pattern-tiled.pdf: the pattern is %.0f x %.0f mm, %d x %d pages: more than %d; is the garment "
+                        "in the right units (--units)?",
+                        sheet->width, sheet->height, (int)out->rows, (int)out->columns, (int)kMaxTiles);
     out->inked = calloc((size_t)out->rows * (size_t)out->columns, 1);
     if (!out->inked)
         return pz_error(ctx, PZ_ERR_NOMEM, "pdf: out of memory");

@@ -534,6 +534,10 @@ static pz_field *field_allocate(int32_t face_count)
 static pz_status apply_sketch(const pz_mesh *mesh, const field_frames *fr, const pz_sketch *sketch, pz_field *field,
                               pz_ctx *ctx)
 {
+    /* A point far off the surface would snap nowhere sensible (and each sample would scan the grid). */
+    pz_status checked = pz_sketch_check(sketch, mesh, "field: sketch", ctx);
+    if (checked != PZ_OK)
+        return checked;
     double *re = calloc((size_t)mesh->face_count + 1, sizeof *re);
     double *im = calloc((size_t)mesh->face_count + 1, sizeof *im);
     if (!re || !im || !field_sketch_accumulate(mesh, fr, sketch, field->mean_edge_length, re, im)) {

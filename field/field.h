@@ -87,6 +87,23 @@ pz_status pz_sketch_parse(const char *text, size_t size, const char *name, doubl
 pz_status pz_sketch_read(const char *path, double scale, pz_sketch **out, pz_ctx *ctx);
 void pz_sketch_free(pz_sketch **sketch);
 
+/* How far a sketch point may lie from the surface: 2 % of the bounding-box diagonal, at least 10 mm
+ * (a curve drawn on a slightly different version of the garment, a prepared or remeshed one, still fits). */
+#define PZ_SKETCH_TOLERANCE_REL 0.02
+#define PZ_SKETCH_TOLERANCE_MM 10.0
+
+/** The tolerance above for this mesh (mm). */
+double pz_sketch_tolerance(const pz_mesh *mesh);
+
+/**
+ * Every point of the sketch lies within pz_sketch_tolerance of the mesh's
+ * surface; otherwise PZ_ERR_DATA naming `name`, the curve, the point and the
+ * distance (a sketch in other units, or drawn on another garment). Far points
+ * are refused from the bounding box alone: O(points + F).
+ * pz_field_compute checks its sketch this way too.
+ */
+pz_status pz_sketch_check(const pz_sketch *sketch, const pz_mesh *mesh, const char *name, pz_ctx *ctx);
+
 /* ------------------------------------------------------------------------ */
 /* The cross-field                                                           */
 /* ------------------------------------------------------------------------ */

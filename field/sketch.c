@@ -94,9 +94,10 @@ pz_status pz_sketch_parse(const char *text, size_t size, const char *name, doubl
 pz_status pz_sketch_read(const char *path, double scale, pz_sketch **out, pz_ctx *ctx)
 {
     *out = NULL;
-    FILE *file = fopen(path, "rb");
-    if (!file)
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    pz_status opened = pz_input_open(path, &file, ctx);
+    if (opened != PZ_OK)
+        return opened;
     char *text = NULL;
     size_t size = 0, capacity = 0;
     for (;;) {
@@ -339,4 +340,59 @@ int field_sketch_accumulate(const pz_mesh *mesh, const field_frames *fr, const p
         }
     grid_free(&grid);
     return 1;
+}
+
+/* ---------------------------------------------------------------- the sketch lies on the garment */
+
+/* Mean edge length over the faces' edges (each interior edge counted twice: a scale, not a statistic). */
+static double mean_face_edge(const pz_mesh *mesh)
+{
+    double sum = 0.0;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k)
+            sum += pz_vec3_distance(mesh->positions + 3 * (size_t)mesh->faces[3 * (size_t)f + k],
+                                    mesh->positions + 3 * (size_t)mesh->faces[3 * (size_t)f + (k + 1) % 3]);
+    return mesh->face_count > 0 ? sum / (3.0 * mesh->face_count) : 0.0;
+}
+
+double pz_sketch_tolerance(const pz_mesh *mesh)
+{
+    double lo[3], hi[3];
+    pz_mesh_bbox(mesh, lo, hi);
+    return fmax(PZ_SKETCH_TOLERANCE_MM, PZ_SKETCH_TOLERANCE_REL * pz_vec3_distance(lo, hi));
+}
+
+pz_status pz_sketch_check(const pz_sketch *sketch, const pz_mesh *mesh, const char *name, pz_ctx *ctx)
+{
+    if (!sketch || sketch->curve_count == 0)
+        return PZ_OK;
+    name = name ? name : "sketch";
+    double tolerance = pz_sketch_tolerance(mesh), lo[3], hi[3];
+    pz_mesh_bbox(mesh, lo, hi);
+    face_grid grid = {{0, 0, 0}, 0, {0, 0, 0}, NULL, NULL};
+    if (!grid_build(mesh, mean_face_edge(mesh), &grid)) {
+        grid_free(&grid);
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory checking the sketch", name);
+    }
+    pz_status status = PZ_OK;
+    for (int32_t c = 0; c < sketch->curve_count && status == PZ_OK; ++c)
+        for (int32_t i = sketch->curve_offsets[c]; i < sketch->curve_offsets[c + 1] && status == PZ_OK; ++i) {
+            const double *p = sketch->points + 3 * (size_t)i;
+            /* The box first: a point far off costs nothing, and the grid never scans for it. */
+            double outside[3];
+            for (int k = 0; k < 3; ++k)
+                outside[k] = fmax(0.0, fmax(lo[k] - p[k], p[k] - hi[k]));
+            double distance = pz_vec3_norm(outside);
+            if (distance <= tolerance) {
+                int32_t f = grid_closest_face(&grid, mesh, p);
+                distance = f >= 0 ? sqrt(face_distance2(mesh, f, p)) : HUGE_VAL;
+            }
+            if (!(distance <= tolerance))
+                status = pz_error(ctx, PZ_ERR_DATA,
+                                  "%s: curve %d point %d is %.4g mm from the garment's surface (at most %.1f mm): is "
+                                  "the sketch in the garment's units and on this garment?",
+                                  name, (int)c, (int)(i - sketch->curve_offsets[c]), distance, tolerance);
+        }
+    grid_free(&grid);
+    return status;
 }

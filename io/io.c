@@ -57,19 +57,58 @@ pz_format pz_format_from_path(const char *path)
     return PZ_FORMAT_UNKNOWN;
 }
 
-/* Reads a whole file into a NUL-terminated buffer (*size excludes the NUL). */
-static pz_status io_read_whole_file(const char *path, unsigned char **data, size_t *size, pz_ctx *ctx)
+/* Bytes looked at before a file is read whole: enough for every format's header. */
+#define IO_HEAD_BYTES 512
+
+/*
+ * The file's first bytes must look like its format before it is read whole,
+ * so that a huge file of something else (a 2 GB sparse file, a renamed
+ * archive) is refused at once, not after gigabytes: PLY and GLB by their
+ * magic ("ply", "glTF"), glTF JSON by its opening brace, OBJ and OFF as text
+ * (no NUL byte). The parsers still check everything after.
+ */
+static pz_status io_check_head(pz_format format, const unsigned char *head, size_t n, const char *path, pz_ctx *ctx)
+{
+    const char *expected = NULL;
+    if (format == PZ_FORMAT_PLY && !(n >= 4 && memcmp(head, "ply", 3) == 0 && (head[3] == '\n' || head[3] == '\r')))
+        expected = "a PLY file starts with \"ply\"";
+    else if (format == PZ_FORMAT_GLB && !(n >= 4 && memcmp(head, "glTF", 4) == 0))
+        expected = "a GLB file starts with \"glTF\"";
+    else if (format == PZ_FORMAT_GLTF) {
+        size_t i = n >= 3 && memcmp(head, "\xEF\xBB\xBF", 3) == 0 ? 3 : 0; /* a UTF-8 byte order mark */
+        while (i < n && (head[i] == ' ' || head[i] == '\t' || head[i] == '\n' || head[i] == '\r'))
+            ++i;
+        if (i < n && head[i] != '{')
+            expected = "a glTF file is a JSON object";
+    } else if (format == PZ_FORMAT_OBJ || format == PZ_FORMAT_OFF) {
+        if (memchr(head, '\0', n))
+            expected = format == PZ_FORMAT_OBJ ? "an OBJ file is text" : "an OFF file is text";
+    }
+    if (!expected)
+        return PZ_OK;
+    return pz_error(ctx, PZ_ERR_DATA, "%s: not what its name says (%s)", path, expected);
+}
+
+/* Reads a whole file into a NUL-terminated buffer (*size excludes the NUL), once its head fits the format. */
+static pz_status io_read_whole_file(const char *path, pz_format format, unsigned char **data, size_t *size,
+                                    pz_ctx *ctx)
 {
     *data = NULL;
     *size = 0;
-    FILE *file = fopen(path, "rb");
-    if (!file)
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
-    struct stat info;
-    if (fstat(fileno(file), &info) == 0 && S_ISDIR(info.st_mode)) {
+    FILE *file = NULL;
+    pz_status opened = pz_input_open(path, &file, ctx);
+    if (opened != PZ_OK)
+        return opened;
+    unsigned char head[IO_HEAD_BYTES];
+    size_t head_size = fread(head, 1, sizeof head, file);
+    pz_status checked = io_check_head(format, head, head_size, path, ctx);
+    if (checked != PZ_OK || fseek(file, 0, SEEK_SET) != 0) {
         fclose(file);
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(EISDIR));
+        return checked != PZ_OK ? checked : pz_error(ctx, PZ_ERR_OPEN, "%s: cannot read: %s", path, strerror(errno));
     }
+    struct stat info;
+    if (fstat(fileno(file), &info) != 0)
+        memset(&info, 0, sizeof info);
     size_t capacity = S_ISREG(info.st_mode) && info.st_size > 0 ? (size_t)info.st_size + 1 : 1 << 16;
     unsigned char *buffer = malloc(capacity);
     size_t used = 0;
@@ -147,7 +186,7 @@ pz_status pz_mesh_read(const char *path, pz_mesh **out, pz_ctx *ctx)
         return pz_error(ctx, PZ_ERR_DATA, "%s: unknown format (expected .obj, .ply, .off, .glb, .gltf)", path);
     unsigned char *data;
     size_t size;
-    pz_status status = io_read_whole_file(path, &data, &size, ctx);
+    pz_status status = io_read_whole_file(path, format, &data, &size, ctx);
     if (status)
         return status;
     status = io_parse(format, data, size, path, out, ctx);

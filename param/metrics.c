@@ -390,6 +390,12 @@ static int dart_metrics(const pz_dart *dart, const double *positions, const doub
     double length_3d = (leg_length(positions, 3, positions, dart->leg_a, n, dart->tip) +
                         leg_length(positions, 3, positions, dart->leg_b, n, dart->tip)) / 2;
     m->mismatch_rel = length_3d > 0 ? fabs(m->leg_a_mm - m->leg_b_mm) / length_3d : 0;
+    /* The mouth: the legs' ends farther from the tip (a leg may be listed from either end). */
+    int32_t mouth = pz_vec3_distance(positions + 3 * dart->leg_a[n - 1], positions + 3 * dart->tip) <
+                            pz_vec3_distance(positions + 3 * dart->leg_a[0], positions + 3 * dart->tip)
+                        ? 0
+                        : n - 1;
+    m->intake_mm = distance2(uv + 2 * dart->leg_a[mouth], uv + 2 * dart->leg_b[mouth]);
     double *b = malloc((size_t)n * 4 * sizeof(double) + 1);
     if (!b)
         return 0;

@@ -436,6 +436,8 @@ typedef struct pz_dart_metrics {
     double leg_a_mm, leg_b_mm;
     double mismatch_rel;
     double symmetry_residual_mm;   /* RMS distance of leg b to leg a mirrored about the best axis through the tip */
+    double intake_mm;              /* the fabric it takes in: the distance between the legs' ends at its mouth (the
+                                      ends farther from the tip) in the pattern */
 } pz_dart_metrics;
 
 typedef struct pz_metrics {

@@ -81,9 +81,10 @@ static pz_status read_id_file(const char *path, const char *const *header_names,
     *pairs = NULL;
     *pair_lines = NULL;
     *pair_count = 0;
-    FILE *file = fopen(path, "r");
-    if (!file)
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    pz_status opened = pz_input_open(path, &file, ctx);
+    if (opened != PZ_OK)
+        return opened;
     char *line = NULL;
     size_t line_capacity = 0, capacity = 0, line_capacity_lines = 0;
     int32_t line_number = 0, headers_seen = 0;
@@ -143,9 +144,10 @@ pz_status pz_read_panel_file(const char *path, int32_t face_count, int32_t *face
                                      int32_t *panel_count, pz_ctx *ctx)
 {
     *panel_count = 0;
-    FILE *file = fopen(path, "r");
-    if (!file)
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    pz_status opened = pz_input_open(path, &file, ctx);
+    if (opened != PZ_OK)
+        return opened;
     char *line = NULL;
     size_t line_capacity = 0;
     int32_t line_number = 0, read = 0, first_blank = 0, largest = -1;
@@ -373,9 +375,10 @@ pz_status pz_read_dart_file(const char *spec, const pz_vertex_space *space, pz_d
 static pz_status read_text_file(const char *path, char **out, pz_ctx *ctx)
 {
     *out = NULL;
-    FILE *file = fopen(path, "rb");
-    if (!file)
-        return pz_error(ctx, PZ_ERR_OPEN, "%s: cannot open: %s", path, strerror(errno));
+    FILE *file = NULL;
+    pz_status opened = pz_input_open(path, &file, ctx);
+    if (opened != PZ_OK)
+        return opened;
     size_t size = 0, capacity = 4096;
     char *text = malloc(capacity);
     while (text) {

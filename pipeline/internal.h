@@ -13,6 +13,7 @@
  *                  pattern's mirror symmetry
  *   tradeoff.c     the outlook on S before the segmentation, the trade-off curve after the verdict
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
+ *   names.c        the pieces' names from their place on the garment
  *   report.c       report.json (pz_result_report)
  *   write.c        pz_result_write: every file, all or nothing
  *
@@ -163,17 +164,27 @@ double *pl_strain_of_poses(const pz_pattern *pattern, const double *uv, const pz
 
 /**
  * Judges every panel of `pattern` against `goals` with the one goal judge:
- * disk and corners on the garment's cut outline, strain and injectivity on
- * the flattening (metrics: the rest pose; pose_strain, may be NULL: each
- * panel's worst strain over the extra poses), seam and dart length mismatch
- * from the metrics. panels (pattern->panel_count) receives each panel's
+ * disk, corners, area share and whether the input forces a narrow or small
+ * piece on the garment's cut outline; strain and injectivity on the
+ * flattening (metrics: the rest pose; pose_strain, may be NULL: each panel's
+ * worst strain over the extra poses); seam and dart length mismatch and dart
+ * intakes from the metrics; the piece's width and its extent across the grain
+ * on the pattern (uv). panels (pattern->panel_count) receives each panel's
  * figures and failure bits.
  */
-pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const pz_metrics *metrics,
-                          const double *pose_strain, const pz_goal_options *goals, pz_goal_result *panels, pz_ctx *ctx);
+pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const double *uv,
+                          const pz_metrics *metrics, const double *pose_strain, const pz_goal_options *goals,
+                          pz_goal_result *panels, pz_ctx *ctx);
 
 /** The final verdict of a result (goals met, reasons, one note when missed) from its metrics. */
 pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx);
+
+/**
+ * Names the segmentation's pieces after their place on the garment (front_left, back, sleeve_right, collar,
+ * ...: docs/run.md, "Piece names") into result->panel_names; mirror partners (result->panel_mirror) get the
+ * same name with the other side. Nothing to do when the panels have names (the user's groups or files).
+ */
+pz_status pl_name_pieces(pz_result *result, pz_ctx *ctx);
 
 /* ---------------------------------------------------------------- tradeoff.c */
 
@@ -202,6 +213,23 @@ int pl_faces_by_panel(const pz_pattern *pattern, int32_t **offsets, int32_t **or
 
 /** layout.obj: the layout curves on the garment, in the input's units. */
 pz_status pl_write_layout_obj(const pz_result *result, FILE *file, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- folder.c */
+
+/** An output folder being written: the hidden folder beside it, swapped in on commit. */
+typedef struct pl_folder {
+    char *target, *parent, *name;   /* the folder asked for, its parent and its last component */
+    char *hidden;                   /* PARENT/.NAME.tmp-PID: where the files are written */
+    int lock_fd;                    /* the parent, locked while this writer works (-1: no lock) */
+    int committed;
+} pl_folder;
+
+/** Checks the folder (pz_output_folder_check), takes the parent's lock, clears dead runs' leftovers, makes the hidden folder. */
+pz_status pl_folder_begin(const char *folder, pl_folder *out, pz_ctx *ctx);
+/** Writes the marker (the files' names) last, syncs, and swaps the hidden folder in for the target. */
+pz_status pl_folder_commit(pl_folder *folder, const char *const *files, int file_count, pz_ctx *ctx);
+/** Removes the hidden folder unless committed, releases the lock, frees. */
+void pl_folder_end(pl_folder *folder);
 
 /** garment.obj: `v` = positions_out, `vt` = uv, the garment's faces with `g panel_K` groups. */
 pz_status pl_write_garment_obj(FILE *file, const pz_mesh *garment, const double *positions,

@@ -18,6 +18,8 @@
  */
 #include "pipeline/internal.h"
 
+#include "core/vec.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -69,7 +71,11 @@ static pz_status prepare_automatically(const pz_run_options *options, pz_result 
     if (status != PZ_OK)
         return status;
     const pz_prepare_report *report = &result->prepared->report;
+    /* Any step that changed the mesh (an orientation flip keeps the counts) makes the prepared one the
+     * garment; the report steps say which ran. */
     int any_change = report->output_faces != report->input_faces || report->output_vertices != report->input_vertices;
+    for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i)
+        any_change |= report->steps[i].ran && i != PZ_PREPARE_HAUSDORFF && i != PZ_PREPARE_POSES;
     for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i) {
         const pz_prepare_step *step = &report->steps[i];
         /* A remesh that was tried and undone says why; one that was not needed stays quiet. */
@@ -84,6 +90,90 @@ static pz_status prepare_automatically(const pz_run_options *options, pz_result 
         *changed = 1;
     }
     return PZ_OK;
+}
+
+/* The extent (bounding-box diagonal) of positions (vertex_count x 3). */
+static double extent_of(const double *positions, int32_t vertex_count)
+{
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    for (int32_t v = 0; v < vertex_count; ++v)
+        for (int k = 0; k < 3; ++k)
+            lo[k] = fmin(lo[k], positions[3 * (size_t)v + k]), hi[k] = fmax(hi[k], positions[3 * (size_t)v + k]);
+    return vertex_count > 0 ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                   (hi[2] - lo[2]) * (hi[2] - lo[2]))
+                            : 0.0;
+}
+
+/*
+ * Extra poses are refused, not repaired, when they cannot be the same garment
+ * in another position: a non-finite coordinate (a repair would drop the
+ * garment's faces for a pose's fault), or a size more than twice or less than
+ * half the rest pose's (a pose in other units: the layout would chase a
+ * thousandfold strain).
+ */
+static pz_status check_poses(const pz_mesh *mesh, const char *name, pz_ctx *ctx)
+{
+    double rest = extent_of(mesh->positions, mesh->vertex_count);
+    for (int32_t p = 0; p < mesh->pose_count; ++p) {
+        const double *pose = mesh->poses + (size_t)p * mesh->vertex_count * 3;
+        for (size_t i = 0; i < 3 * (size_t)mesh->vertex_count; ++i)
+            if (!isfinite(pose[i]))
+                return pz_error(ctx, PZ_ERR_DATA, "%s: pose %d: vertex %d has a non-finite coordinate", name,
+                                (int)p + 1, (int)(i / 3));
+        double extent = extent_of(pose, mesh->vertex_count);
+        if (rest > 0 && (extent > 2 * rest || extent < 0.5 * rest))
+            return pz_error(ctx, PZ_ERR_DATA,
+                            "%s: pose %d is %.4g units across where the rest pose is %.4g: not the same garment, or "
+                            "in other units (convert it to the rest pose's)",
+                            name, (int)p + 1, extent, rest);
+    }
+    return PZ_OK;
+}
+
+static int compare_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/*
+ * How much the poses stretch the surface: every edge's relative length change
+ * against the rest pose, over all poses; the median and the 95th percentile.
+ * A strain goal below what the poses themselves change cannot be met in
+ * every pose: said before the long work (docs/run.md).
+ */
+static void measure_pose_spread(const pz_mesh *mesh, pz_result *result, pz_ctx *ctx)
+{
+    result->pose_edge_change_median = result->pose_edge_change_p95 = 0;
+    if (mesh->pose_count == 0 || mesh->face_count == 0)
+        return;
+    size_t count = 3 * (size_t)mesh->face_count * (size_t)mesh->pose_count;
+    double *change = malloc(count * sizeof(double));
+    if (!change)
+        return;
+    size_t n = 0;
+    for (int32_t p = 0; p < mesh->pose_count; ++p) {
+        const double *pose = mesh->poses + (size_t)p * mesh->vertex_count * 3;
+        for (int32_t f = 0; f < mesh->face_count; ++f)
+            for (int k = 0; k < 3; ++k) {
+                int32_t a = mesh->faces[3 * (size_t)f + k], b = mesh->faces[3 * (size_t)f + (k + 1) % 3];
+                double rest = pz_vec3_distance(mesh->positions + 3 * (size_t)a, mesh->positions + 3 * (size_t)b);
+                double posed = pz_vec3_distance(pose + 3 * (size_t)a, pose + 3 * (size_t)b);
+                if (rest > 0)
+                    change[n++] = fabs(posed / rest - 1.0);
+            }
+    }
+    qsort(change, n, sizeof(double), compare_double);
+    if (n > 0) {
+        result->pose_edge_change_median = change[n / 2];
+        result->pose_edge_change_p95 = change[(size_t)(0.95 * (double)(n - 1))];
+    }
+    free(change);
+    if (result->from_run && result->pose_edge_change_p95 > result->options.goals.max_strain)
+        pz_note(ctx, "run: the poses change 5 %% of the edge lengths by more than %.3g (median %.3g): a strain goal "
+                "below about %.2g is unlikely to be met in every pose (S = %g)",
+                result->pose_edge_change_p95, result->pose_edge_change_median, result->pose_edge_change_p95,
+                result->options.goals.max_strain);
 }
 
 /* garment.obj's vertex positions in the input's units (see the file comment). */
@@ -130,12 +220,15 @@ pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepa
         status = map_raw_ids(input, garment, &kept, ctx);
     if (status != PZ_OK)
         return status;
+    const char *name = options->name ? options->name : "garment";
+    if ((status = check_poses(garment->mesh, name, ctx)) != PZ_OK)
+        return status;
     pz_mesh_to_mm(garment->mesh, options->units, &result->units);
     result->units_guessed = options->units == PZ_UNITS_AUTO;
+    measure_pose_spread(garment->mesh, result, ctx);
     int prepared = 0;
     if (prepare && (status = prepare_automatically(options, result, &garment->mesh, &prepared, ctx)) != PZ_OK)
         return status;
-    const char *name = options->name ? options->name : "garment";
     status = pz_mesh_prepare_quietly_first(&garment->mesh, name, options->repair_flags, ctx);
     if (status != PZ_OK)
         return status;

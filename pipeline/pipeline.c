@@ -174,6 +174,14 @@ static pz_status build_pieces(pz_result *result, pz_ctx *ctx)
     return status;
 }
 
+/* The widest piece the fabric takes across its grain: its width less the allowance on both sides (a cut
+ * piece lies grain-true on the roll, docs/marker.md). The piece-width goal of a run that sets none. */
+static double usable_fabric_width(const pz_export_options *output)
+{
+    double allowance = fmax(output->seam_allowance_mm, output->hem_allowance_mm);
+    return fmax(output->fabric_width_mm - 2 * fmax(allowance, 0), 1);
+}
+
 /* ---------------------------------------------------------------- the pipeline */
 
 /* Everything one call holds besides the result. */
@@ -302,6 +310,8 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
         result->options = *options;
     else
         pz_run_options_default(&result->options);
+    if (from_run && !(result->options.goals.max_piece_width_mm > 0))
+        result->options.goals.max_piece_width_mm = usable_fabric_width(&result->options.output);
     pipeline_run run;
     memset(&run, 0, sizeof run);
     run.panels = panels;
@@ -329,6 +339,8 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
         status = pl_measure_tradeoff(result, ctx);
     if (status == PZ_OK)
         status = find_mirror_panels(result, ctx);
+    if (status == PZ_OK && from_run)
+        status = pl_name_pieces(result, ctx);
     if (status == PZ_OK)
         status = build_layout_curves(result, ctx);
     if (status == PZ_OK)

@@ -226,6 +226,8 @@ typedef struct pz_result {
     pz_units units;                  /* the input's units */
     int units_guessed;
     double grain[3];                 /* the warp direction used */
+    double pose_edge_change_median;  /* extra poses: the relative change of the edge lengths against the rest */
+    double pose_edge_change_p95;     /* pose, median and 95th percentile over every edge and pose (0 without) */
     const char *grain_source;        /* "given", "vertical axis (y)", "vertical axis (z)" (static) */
     /* the panels and the pattern */
     const char *panels_source;       /* "segmentation", "file", "uv", "files", "groups", "components" (static) */
@@ -318,15 +320,26 @@ typedef enum pz_output_file {
 pz_status pz_outputs_parse(const char *list, unsigned *outputs, pz_ctx *ctx);
 
 /**
- * Writes the chosen files of a result into `folder` (created when missing),
- * all or nothing: every file goes to a temporary first and is renamed when
- * all are complete; on failure the files renamed and folders created are
- * removed. Files that do not apply (layout.obj of pz_flatten, energy.svg of
+ * Writes the chosen files of a result into `folder` as one unit: the files
+ * are written and synced into a hidden folder beside it, with the marker
+ * `.panelize` last, which then replaces `folder` whole (created when missing;
+ * an earlier panelize output is exchanged atomically and its files removed;
+ * a folder of other files is refused, see pz_output_folder_check). On failure
+ * or cancellation the earlier folder is left as it was and nothing new stays
+ * behind; writers into one parent take turns. Files that do not apply (layout.obj of pz_flatten, energy.svg of
  * another back-end) are skipped. *report_text (may be NULL) receives
  * report.json's text (malloc'd, the caller frees) when it was written.
  */
 pz_status pz_result_write(pz_result *result, const char *folder, unsigned outputs, char **report_text,
                           pz_ctx *ctx);
+
+/**
+ * Whether `folder` can receive a result, before any work: it is missing (its
+ * nearest existing ancestor a writable directory), empty, or an earlier
+ * panelize output (it holds the marker `.panelize`). A file, a folder of
+ * someone else's files or a read-only place is PZ_ERR_CREATE naming it.
+ */
+pz_status pz_output_folder_check(const char *folder, pz_ctx *ctx);
 
 /** report.json's content as a cJSON tree (the caller deletes it); NULL when out of memory. */
 cJSON *pz_result_report(const pz_result *result);

@@ -440,6 +440,7 @@ static void add_seams_and_darts(json_builder *builder, cJSON *root, const report
         add_number(builder, dart, "leg_b_mm", m->leg_b_mm, 4);
         add_number(builder, dart, "mismatch_rel", m->mismatch_rel, 8);
         add_number(builder, dart, "symmetry_residual_mm", m->symmetry_residual_mm, 6);
+        add_number(builder, dart, "intake_mm", m->intake_mm, 4);
     }
 }
 
@@ -525,6 +526,11 @@ static int extend_panels(const pz_result *result, cJSON *root)
         ok &= add_plain_number(item, "corners", goals->corners);
         ok &= add_plain_number(item, "darts", darts[p]);
         ok &= add_plain_number(item, "mirror_panel", result->panel_mirror ? result->panel_mirror[p] : -1);
+        /* The piece-shape figures the goals were judged on (docs/segment.md, "Piece shapes"). */
+        ok &= add_plain_number(item, "area_share", pz_round(goals->area_share, 6));
+        ok &= add_plain_number(item, "width_mm", pz_round(goals->min_width_mm, 3));
+        ok &= add_plain_number(item, "across_grain_mm", pz_round(goals->across_grain_mm, 3));
+        ok &= cJSON_AddBoolToObject(item, "shape_forced_by_input", goals->width_forced || goals->area_forced) != NULL;
         char text[256];
         pz_goal_describe(goals, &result->options.goals, text, sizeof text);
         ok &= cJSON_AddBoolToObject(item, "goals_met", goals->failures == 0) != NULL;
@@ -596,6 +602,7 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
     ok &= add_plain_number(object, "inserted", segment->inserted_count);
     ok &= add_plain_number(object, "removed", segment->removed_count);
     ok &= add_plain_number(object, "evaluations", segment->evaluation_count);
+    ok &= add_plain_number(object, "merged_slivers", segment->merged_slivers);
     ok &= add_plain_number(object, "dart_count", segment->dart_count);
     ok &= cJSON_AddBoolToObject(object, "layout_goals_met", segment->goals_met) != NULL;
     if (segment->max_pieces > 0) {
@@ -773,6 +780,12 @@ cJSON *pz_result_report(const pz_result *result)
     if (root && result->marker) {
         cJSON *marker = pz_marker_report_json(result->marker);
         failed |= !marker || !cJSON_AddItemToObject(root, "marker", marker);
+    }
+    cJSON *input = root ? cJSON_GetObjectItem(root, "input") : NULL;
+    if (input && result->garment->pose_count > 0) {
+        cJSON *spread = cJSON_AddObjectToObject(input, "pose_edge_change");
+        failed |= !spread || !add_plain_number(spread, "median", pz_round(result->pose_edge_change_median, 6)) ||
+                  !add_plain_number(spread, "p95", pz_round(result->pose_edge_change_p95, 6));
     }
     if (root && !failed && result->from_run)
         failed |= !extend_run_report(result, root);

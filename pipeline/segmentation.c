@@ -34,6 +34,7 @@ typedef struct goal_setting {
     uint64_t *vetoed;                /* face-set keys of panels the joint flattening rejected */
     int32_t vetoed_count;
     int32_t verdict_rounds;          /* segmentations redone because of them */
+    int32_t strain_rounds;           /* of them, those that vetoed a panel over S (or not injective) */
     pz_segment_cache *cache;         /* evaluations shared by the rounds */
     char verdict_reasons[512];       /* the last rejection's panels, for the progress note */
 } goal_setting;
@@ -86,8 +87,8 @@ struct pl_segmenter {
 };
 
 static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_segment_result *segment,
-                         const pz_pattern *pattern, const pz_metrics *metrics, const double *pose_strain,
-                         const pz_ctx *ctx);
+                         const pz_pattern *pattern, const double *uv, const pz_metrics *metrics,
+                         const double *pose_strain, const pz_ctx *ctx);
 static void set_goals(const pl_segmenter *seg, goal_setting *setting, double max_strain, int32_t max_corners);
 static void on_progress(void *user, const char *stage, int32_t panel_count, double worst_strain);
 static pz_status solve_setting(pl_segmenter *seg, pz_mesh *garment, const pz_topology *topology,
@@ -157,10 +158,15 @@ static pz_status gather_sketch(const pl_segmenter *seg, const pz_mesh *mesh, pz_
 {
     *out = NULL;
     pz_sketch *from_file = NULL;
-    if (seg->options->sketch_path) {
-        pz_status status = pz_sketch_read(seg->options->sketch_path, mesh->unit_scale, &from_file, ctx);
-        if (status != PZ_OK)
-            return status;
+    pz_status status = pz_sketch_check(seg->options->sketch, mesh, "sketch", ctx);
+    if (status == PZ_OK && seg->options->sketch_path) {
+        status = pz_sketch_read(seg->options->sketch_path, mesh->unit_scale, &from_file, ctx);
+        if (status == PZ_OK)
+            status = pz_sketch_check(from_file, mesh, seg->options->sketch_path, ctx);
+    }
+    if (status != PZ_OK) {
+        pz_sketch_free(&from_file);
+        return status;
     }
     pz_sketch *sketch = calloc(1, sizeof *sketch);
     int ok = sketch && sketch_append(sketch, seg->options->sketch) && sketch_append(sketch, from_file) &&
@@ -206,6 +212,10 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     pz_segment_options options = seg->options->segment;
     options.max_corners = goals->goals.max_corners;
     options.max_strain = goals->goals.max_strain;
+    options.min_piece_width_mm = goals->goals.min_piece_width_mm;
+    options.min_piece_area = goals->goals.min_piece_area;
+    options.max_piece_width_mm = goals->goals.max_piece_width_mm;
+    options.min_dart_intake_mm = goals->goals.min_dart_intake_mm;
     options.sketch = sketch;
     options.seed_cuts = seeds;
     memcpy(options.grain, seg->grain, sizeof options.grain);
@@ -216,14 +226,55 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     if (!goals->cache && !(goals->cache = pz_segment_cache_create()))
         return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
     options.cache = goals->cache;
-    /* The first verdict round only vetoes the rejected panels; from the second on, each round asks
-     * the evaluations for 10 % more strain margin (at most 50 %): they were too optimistic here. */
-    int margin_rounds = goals->verdict_rounds > 1 ? goals->verdict_rounds - 1 : 0;
+    /* The first verdict round over S only vetoes the rejected panels; from the second on, each such round
+     * asks the evaluations for 10 % more strain margin (at most 50 %): they were too optimistic here. A
+     * round that vetoed only darts that close up in the joint flattening (intake) asks for none. */
+    int margin_rounds = goals->strain_rounds > 1 ? goals->strain_rounds - 1 : 0;
     options.strain_margin = fmin(VERDICT_MARGIN_MAX, VERDICT_MARGIN_STEP * margin_rounds);
     if (goals->verdict_rounds > 0)
         pz_note(progress, "run: segment again (round %d): the joint flattening rejected %s",
                 (int)goals->verdict_rounds + 1, goals->verdict_reasons);
     return pz_segment(garment, topology, seg->field, &options, out, ctx);
+}
+
+/*
+ * *panel = a panel of the layout within the corner bound on the traced seams and over it on the trued
+ * garment (its corners counted without flattening), or -1. Corners are the only goal truing can break
+ * without a flattening to tell: a turn of the outline just under the corner angle can pass it once trued.
+ */
+static pz_status truing_added_corners(const pl_segmenter *seg, const pz_mesh *garment, const pz_topology *topology,
+                                      int32_t *panel, pz_ctx *ctx)
+{
+    const pz_segment_result *segment = seg->segment;
+    *panel = -1;
+    int32_t *offsets = calloc((size_t)segment->panel_count + 2, sizeof(int32_t));
+    int32_t *faces = malloc((size_t)segment->face_count * sizeof(int32_t) + 1);
+    if (!offsets || !faces) {
+        free(offsets), free(faces);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    }
+    for (int32_t f = 0; f < segment->face_count; ++f)
+        ++offsets[segment->face_panel[f] + 2];
+    for (int32_t p = 0; p < segment->panel_count; ++p)
+        offsets[p + 2] += offsets[p + 1];
+    for (int32_t f = 0; f < segment->face_count; ++f)
+        faces[offsets[segment->face_panel[f] + 1]++] = f;
+    pz_goal_options goals = seg->goals.goals;
+    goals.textile_iterations = -1; /* shape only: disk and corners */
+    pz_ctx quiet;
+    pz_ctx_quiet(ctx, &quiet);
+    for (int32_t p = 0; p < segment->panel_count && *panel < 0; ++p) {
+        if (segment->panels[p].corners > goals.max_corners)
+            continue; /* over it already: not the truing's doing */
+        pz_goal_result trued;
+        if (pz_segment_goals(garment, topology, segment->edge_cut, faces + offsets[p], offsets[p + 1] - offsets[p],
+                             &goals, &trued, &quiet) == PZ_OK &&
+            trued.corners > goals.max_corners)
+            *panel = p;
+    }
+    free(offsets);
+    free(faces);
+    return PZ_OK;
 }
 
 pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choice *choice, pz_ctx *ctx)
@@ -292,6 +343,18 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
                     "mean turn between seam edges %.1f -> %.1f degrees", (int)seg->truing_result.moved_vertices,
                     seg->truing_result.max_move_mm, (int)seg->truing_result.relaxed_vertices,
                     seg->truing_result.mean_turn_before_deg, seg->truing_result.mean_turn_after_deg);
+        int32_t turned = -1;
+        if (status == PZ_OK)
+            status = truing_added_corners(seg, garment, topology, &turned, ctx);
+        if (status == PZ_OK && turned >= 0) {
+            /* A trued outline turned past the corner angle where the layout's did not: the layout stands, the
+             * truing goes (cosmetic; a verdict round would have cut the panel for it). */
+            pz_note(ctx, "run: truing gave panel %d more than %d corners: the seams stay as traced", (int)turned,
+                    (int)seg->goals.goals.max_corners);
+            status = keep_or_restore_original(seg, garment, ctx);
+            memset(&seg->truing_result, 0, sizeof seg->truing_result);
+            seg->truing_dropped = 1;
+        }
     }
     if (status == PZ_OK) {
         const pz_segment_result *segment = seg->segment;
@@ -371,7 +434,7 @@ static pz_status ladder_round(const pl_segmenter *seg, pz_mesh *garment, const p
     if (status == PZ_OK && pattern->mesh->pose_count > 0 && !(pose_strain = pl_strain_of_poses(pattern, uv, &fabric, &quiet)))
         status = PZ_ERR_NOMEM;
     if (status == PZ_OK)
-        *accepted = verdict_check(goals, garment, segment, pattern, metrics, pose_strain, ctx);
+        *accepted = verdict_check(goals, garment, segment, pattern, uv, metrics, pose_strain, ctx);
     free(pose_strain);
     pz_metrics_free(&metrics);
     free(uv);
@@ -517,6 +580,31 @@ static pz_status ladder_parents(pl_segmenter *seg, pz_mesh *garment, const pz_to
     return PZ_OK;
 }
 
+/* The failures that veto a panel: all but the piece shapes, which a split (the next layout's answer to a
+ * veto) can only make worse; a narrow or small panel is reported as it is. */
+#define VETO_FAILURES (~(unsigned)PZ_GOAL_SHAPE)
+
+/* The failures the verdict rounds veto for a layout: every one (VETO_FAILURES) when the layout met its
+ * goals; when it missed only S (the strain of slivers merged, docs/segment.md "Piece shapes"), all but S,
+ * which a new layout would miss again; none when it missed more (unreachable goals: a new layout cannot
+ * help, and each round costs a layout and a joint flattening). A panel missing only a shape goal (a
+ * sketch's sliver) leaves the rounds their use. */
+static unsigned verdict_vetoes(const pz_segment_result *segment)
+{
+    unsigned missed = 0;
+    for (int32_t p = 0; p < segment->panel_count; ++p)
+        missed |= segment->panels[p].goals.failures & VETO_FAILURES;
+    if (!missed)
+        return VETO_FAILURES;
+    return missed == PZ_GOAL_STRAIN ? VETO_FAILURES & ~(unsigned)PZ_GOAL_STRAIN : 0;
+}
+
+/* 1 when the layout met every goal a new layout could change. */
+static int layout_reachable(const pz_segment_result *segment)
+{
+    return verdict_vetoes(segment) == VETO_FAILURES;
+}
+
 /*
  * The verdict rounds (docs/run.md, "The final verdict"): the segmentation
  * judged each panel on its own flattening; the joint flattening couples the
@@ -526,20 +614,21 @@ static pz_status ladder_parents(pl_segmenter *seg, pz_mesh *garment, const pz_to
  * MAX_VERDICT_ROUNDS times; then the last pattern stands.
  *
  * The verdict on one flattening under `goals`: 1 accepts; 0 vetoes the failing
- * panels for the next layout. A layout that already misses its goals
- * (unreachable ones) is accepted at once: making it again cannot help, and
- * each round costs a layout and a joint flattening.
+ * panels for the next layout (the failures verdict_vetoes names: a layout that
+ * already misses its goals is accepted at once, one that misses only S is
+ * judged on the rest).
  */
 static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_segment_result *segment,
-                         const pz_pattern *pattern, const pz_metrics *metrics, const double *pose_strain,
-                         const pz_ctx *ctx)
+                         const pz_pattern *pattern, const double *uv, const pz_metrics *metrics,
+                         const double *pose_strain, const pz_ctx *ctx)
 {
-    if (!segment || !garment || !segment->goals_met || goals->verdict_rounds >= MAX_VERDICT_ROUNDS)
+    unsigned vetoes = segment ? verdict_vetoes(segment) : 0;
+    if (!segment || !garment || !vetoes || goals->verdict_rounds >= MAX_VERDICT_ROUNDS)
         return 1;
     /* With a piece budget the budget, not the goals, decides the pieces: the report says what is missed. */
     if (segment->max_pieces > 0)
         return 1;
-    int32_t panels = pattern->panel_count, added = 0, *offsets = NULL, *order = NULL;
+    int32_t panels = pattern->panel_count, added = 0, over_strain = 0, *offsets = NULL, *order = NULL;
     goals->verdict_reasons[0] = '\0';
     int bucketed = pl_faces_by_panel(pattern, &offsets, &order);
     pz_goal_result *judged = calloc((size_t)panels + 1, sizeof *judged);
@@ -551,13 +640,14 @@ static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_s
     /* Every goal, judged as the report will judge it: strain and injectivity on the joint flattening,
      * disk and corners on the trued outline, seam lengths on the pattern. */
     if (!bucketed || !judged || !grown ||
-        pl_judge_panels(garment, pattern, metrics, pose_strain, &goals->goals, judged, &quiet) != PZ_OK) {
+        pl_judge_panels(garment, pattern, uv, metrics, pose_strain, &goals->goals, judged, &quiet) != PZ_OK) {
         free(offsets), free(order), free(judged);
         return 1;
     }
     for (int32_t p = 0; p < panels; ++p) {
-        if (!judged[p].failures)
+        if (!(judged[p].failures & vetoes))
             continue;
+        over_strain += (judged[p].failures & (PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE)) != 0;
         goals->vetoed[goals->vetoed_count + added++] =
             pz_segment_face_set_key(order + offsets[p], offsets[p + 1] - offsets[p]);
         /* Why, for the note the next round prints. */
@@ -574,6 +664,7 @@ static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_s
         return 1;
     goals->vetoed_count += added;
     ++goals->verdict_rounds;
+    goals->strain_rounds += over_strain > 0;
     return 0;
 }
 
@@ -588,11 +679,11 @@ int pl_segmenter_accept(pl_segmenter *seg, const pz_pattern *pattern, const doub
         return 1;
     /* The goal holds in every pose: the other poses are measured on the same pattern points. */
     double *pose_strain = NULL;
-    if (seg->segment && seg->segment->goals_met && pattern->mesh->pose_count > 0 &&
+    if (seg->segment && layout_reachable(seg->segment) && pattern->mesh->pose_count > 0 &&
         seg->goals.verdict_rounds < MAX_VERDICT_ROUNDS)
         pose_strain = pl_strain_of_poses(pattern, uv, &seg->options->flatten.fabric, &quiet);
     int32_t vetoed_before = seg->goals.vetoed_count, rounds_before = seg->goals.verdict_rounds;
-    int accepted = verdict_check(&seg->goals, seg->garment, seg->segment, pattern, metrics, pose_strain, ctx);
+    int accepted = verdict_check(&seg->goals, seg->garment, seg->segment, pattern, uv, metrics, pose_strain, ctx);
     free(pose_strain);
     pz_metrics_free(&metrics);
     if (!accepted && seg->options->truing && !seg->truing_dropped && seg->truing_result.moved_vertices > 0) {

@@ -44,9 +44,67 @@ static void seam_mismatch_by_panel(const pz_metrics *metrics, int32_t panel_coun
     }
 }
 
-pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const pz_metrics *metrics,
-                          const double *pose_strain, const pz_goal_options *goals, pz_goal_result *panels,
-                          pz_ctx *ctx)
+/*
+ * The figures of the pieces as cut (docs/segment.md, "Piece shapes"): each panel's width on the pattern
+ * (pz_piece_width in 2D, from the cut mesh's boundary: the outline and the dart legs), its extent across
+ * the grain (in u: the warp runs along v) and its darts' smallest intake. The area share and whether the
+ * input forces the shape stay the garment's (pz_segment_goals).
+ */
+static pz_status piece_figures(const pz_pattern *pattern, const double *uv, const pz_metrics *metrics,
+                               const int32_t *face_offsets, const int32_t *face_ids, const pz_goal_options *goals,
+                               pz_goal_result *panels, pz_ctx *ctx)
+{
+    const pz_mesh *cut = pattern->mesh;
+    pz_topology *topology = NULL;
+    int32_t *local = malloc((size_t)cut->vertex_count * sizeof(int32_t) + 1);
+    int32_t *faces = malloc((size_t)cut->face_count * 3 * sizeof(int32_t) + 1);
+    double *points = malloc((size_t)cut->vertex_count * 2 * sizeof(double) + 1);
+    uint8_t *source = malloc((size_t)cut->vertex_count + 1);
+    pz_status status = local && faces && points && source ? pz_topology_build(cut, &topology, ctx)
+                                                          : pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
+    if (local)
+        memset(local, 0xff, (size_t)cut->vertex_count * sizeof(int32_t));
+    for (int32_t p = 0; status == PZ_OK && p < pattern->panel_count; ++p) {
+        pz_goal_result *figures = &panels[p];
+        int32_t count = 0, vertices = 0;
+        double lo = INFINITY, hi = -INFINITY;
+        for (int32_t i = face_offsets[p]; i < face_offsets[p + 1]; ++i, ++count)
+            for (int k = 0; k < 3; ++k) {
+                int32_t v = cut->faces[3 * face_ids[i] + k];
+                if (local[v] < 0) {
+                    local[v] = vertices;
+                    memcpy(points + 2 * vertices, uv + 2 * v, 2 * sizeof(double));
+                    source[vertices++] = topology->vertex_on_boundary[v];
+                    lo = fmin(lo, uv[2 * v]);
+                    hi = fmax(hi, uv[2 * v]);
+                }
+                faces[3 * count + k] = local[v];
+            }
+        figures->across_grain_mm = hi >= lo ? hi - lo : 0;
+        if (goals->min_piece_width_mm > 0)
+            status = pz_piece_width(vertices, points, 2, count, faces, source, &figures->min_width_mm, ctx);
+        for (int32_t i = face_offsets[p]; i < face_offsets[p + 1]; ++i)
+            for (int k = 0; k < 3; ++k)
+                local[cut->faces[3 * face_ids[i] + k]] = -1;
+    }
+    for (int32_t d = 0; status == PZ_OK && d < pattern->dart_count && d < metrics->dart_count; ++d) {
+        pz_goal_result *figures = &panels[pattern->darts[d].panel];
+        double intake = metrics->darts[d].intake_mm;
+        ++figures->darts;
+        if (figures->min_dart_intake_mm < 0 || intake < figures->min_dart_intake_mm)
+            figures->min_dart_intake_mm = intake;
+    }
+    pz_topology_free(&topology);
+    free(local);
+    free(faces);
+    free(points);
+    free(source);
+    return status;
+}
+
+pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, const double *uv,
+                          const pz_metrics *metrics, const double *pose_strain, const pz_goal_options *goals,
+                          pz_goal_result *panels, pz_ctx *ctx)
 {
     int32_t panel_count = pattern->panel_count;
     const int32_t *cut_faces = pattern->mesh->faces;  /* the garment's faces, in order, on cut-mesh copies */
@@ -92,8 +150,11 @@ pz_status pl_judge_panels(const pz_mesh *garment, const pz_pattern *pattern, con
         figures->flipped_triangles = panel->flipped_triangles;
         figures->boundary_self_intersections = panel->boundary_self_intersections;
         figures->max_seam_mismatch = mismatch[p];
-        figures->failures = pz_goal_judge(goals, figures);
     }
+    if (status == PZ_OK)
+        status = piece_figures(pattern, uv, metrics, face_offsets, face_ids, goals, panels, ctx);
+    for (int32_t p = 0; p < panel_count && status == PZ_OK; ++p)
+        panels[p].failures = pz_goal_judge(goals, &panels[p]);
     free(mismatch);
     free(edge_cut);
     free(face_offsets);
@@ -179,7 +240,8 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
     pz_status status =
-        pl_judge_panels(result->garment, pattern, result->metrics[0], pose_strain, &goals, verdict->panels, &quiet);
+        pl_judge_panels(result->garment, pattern, result->uv, result->metrics[0], pose_strain, &goals, verdict->panels,
+                        &quiet);
     free(pose_strain);
     if (status != PZ_OK)
         return pz_error(ctx, status, "%s", quiet.error);
@@ -196,10 +258,18 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
         return PZ_OK;
     verdict->goals_met = 0;
     write_reasons(verdict, &goals, pattern->panel_count);
+    /* Where the layout merged slivers, S was given up on purpose: say so (docs/segment.md, "Piece shapes"). */
+    int32_t merged = result->segment ? result->segment->merged_slivers : 0;
+    char why[256] = "";
+    if (!layout_reachable && merged > 0)
+        snprintf(why, sizeof why, " (%d pieces under %g mm or %g %% of the area merged into their neighbours rather "
+                 "than cut: a sliver is never the answer to S; best effort written)", (int)merged,
+                 goals.min_piece_width_mm, 100 * goals.min_piece_area);
+    else if (!layout_reachable)
+        snprintf(why, sizeof why, " (the layout could not meet them; best effort written)");
     pz_note(ctx, "run: goals %s: %d of %d panels miss them, %d exceed S = %g, worst strain %.3g%s",
             layout_reachable ? "not met" : "unreachable", (int)verdict->failing_panels, (int)pattern->panel_count,
-            (int)verdict->over_strain_panels, goals.max_strain, verdict->worst_strain,
-            layout_reachable ? "" : " (the layout could not meet them; best effort written)");
+            (int)verdict->over_strain_panels, goals.max_strain, verdict->worst_strain, why);
     return PZ_OK;
 }
 

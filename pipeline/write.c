@@ -1,10 +1,10 @@
 /*
  * pipeline/write.c -- pz_result_write: the files of a result, all or nothing.
  *
- * Every file is written to a temporary beside its final name
- * (pz_output_open) and renamed only when all are complete; if anything fails,
- * the files renamed so far and the folders created are removed again, so a
- * failed write leaves nothing. Order: garment.obj, the export table's files
+ * Every file is written, complete and synced, into a hidden folder beside
+ * the target, which is swapped in whole when all are written (folder.c): a
+ * reader sees the earlier set or the new one, never a mix, and a failed or
+ * cancelled write leaves the earlier set as it was. Order: garment.obj, the export table's files
  * but report.html (export/), layout.obj, energy.svg, report.json (built then,
  * so it can carry the write timing of the files before it), report.html
  * (which shows report.json).
@@ -330,6 +330,69 @@ static void fill_export_inputs(writer *w)
     inputs->layout_curve_count = result->layout_curve_count;
 }
 
+/* mkdir -p of the folder's parent (the folder itself is swapped in whole: folder.c). */
+static pz_status make_parent(const char *folder, created_dirs *dirs, pz_ctx *ctx)
+{
+    char *parent = strdup(folder);
+    if (!parent)
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
+    size_t length = strlen(parent);
+    while (length > 1 && parent[length - 1] == '/')
+        parent[--length] = '\0';
+    char *slash = strrchr(parent, '/');
+    pz_status status = PZ_OK;
+    if (slash && slash != parent) {
+        *slash = '\0';
+        status = make_directories(parent, dirs, ctx);
+    }
+    free(parent);
+    return status;
+}
+
+/* Writes every listed file into `dir` (the hidden folder), each complete and synced. */
+static pz_status write_all(writer *w, const char *dir, const char *folder, int energy_wanted, const char **names,
+                           int *name_count, pz_ctx *ctx)
+{
+    const pz_result *result = w->result;
+    int count = w->output_count, committed = 0;
+    pz_output files[MAX_OUTPUTS];
+    char *paths[MAX_OUTPUTS], *shown[MAX_OUTPUTS];
+    memset(files, 0, sizeof files);
+    memset(paths, 0, sizeof paths);
+    memset(shown, 0, sizeof shown);
+    pz_status status = PZ_OK;
+    for (int i = 0; i < count && status == PZ_OK; ++i)
+        if (!(paths[i] = join_path(dir, w->outputs[i].name)) || !(shown[i] = join_path(folder, w->outputs[i].name)))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
+    for (int i = 0; i < count && status == PZ_OK; ++i) {
+        /* Writers name the file by where it will be (messages); it is written where it is made. */
+        if ((status = pz_output_open(&files[i], paths[i], "wb", ctx)) == PZ_OK)
+            status = write_file(w, &w->outputs[i], shown[i], files[i].file, ctx);
+        if (status == PZ_OK)
+            status = pz_check_cancel(ctx, "write");
+    }
+    for (; committed < count && status == PZ_OK; ++committed)
+        if ((status = pz_output_commit(&files[committed], ctx)) == PZ_OK)
+            names[(*name_count)++] = w->outputs[committed].name;
+    /* energy.svg has its own atomic writer (param/). */
+    char *energy_path = NULL;
+    if (status == PZ_OK && energy_wanted) {
+        if (!(energy_path = join_path(dir, "energy.svg")))
+            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
+        else if ((status = pz_springmass_write_energy_svg(result->pattern, result->uv, &result->backend.springmass,
+                                                          energy_path, ctx)) == PZ_OK)
+            names[(*name_count)++] = "energy.svg";
+    }
+    /* Abort is a no-op on an output never opened or already committed (its fields are cleared). */
+    for (int i = 0; i < count; ++i) {
+        pz_output_abort(&files[i]);
+        free(paths[i]);
+        free(shown[i]);
+    }
+    free(energy_path);
+    return status;
+}
+
 pz_status pz_result_write(pz_result *result, const char *folder, unsigned outputs, char **report_text, pz_ctx *ctx)
 {
     if (report_text)
@@ -342,51 +405,28 @@ pz_status pz_result_write(pz_result *result, const char *folder, unsigned output
     w.write_start = pz_seconds();
     fill_export_inputs(&w);
     list_outputs(&w, outputs);
-    int count = w.output_count, committed = 0;
-    pz_output files[MAX_OUTPUTS];
-    char *paths[MAX_OUTPUTS];
-    memset(files, 0, sizeof files);
-    memset(paths, 0, sizeof paths);
+    int energy_wanted = result->options.flatten.backend == PZ_BACKEND_SPRINGMASS && (outputs & PZ_OUTPUT_ENERGY_SVG);
+    const char *names[MAX_OUTPUTS + 1];
+    int name_count = 0;
     created_dirs dirs = {0};
-    char *energy_path = NULL;
-    int energy_written = 0, energy_wanted = result->options.flatten.backend == PZ_BACKEND_SPRINGMASS &&
-                                            (outputs & PZ_OUTPUT_ENERGY_SVG);
-    pz_status status = make_directories(folder, &dirs, ctx);
-    for (int i = 0; i < count && status == PZ_OK; ++i)
-        if (!(paths[i] = join_path(folder, w.outputs[i].name)))
-            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
-    for (int i = 0; i < count && status == PZ_OK; ++i) {
-        if ((status = pz_output_open(&files[i], paths[i], "wb", ctx)) == PZ_OK)
-            status = write_file(&w, &w.outputs[i], paths[i], files[i].file, ctx);
-        if (status == PZ_OK)
-            status = pz_check_cancel(ctx, "write");
-    }
-    /* energy.svg has its own atomic writer (param/): written once the others are complete in their
-     * temporaries, and removed again should a rename fail afterwards. */
-    if (status == PZ_OK && energy_wanted) {
-        if (!(energy_path = join_path(folder, "energy.svg")))
-            status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
-        else if ((status = pz_springmass_write_energy_svg(result->pattern, result->uv, &result->backend.springmass,
-                                                          energy_path, ctx)) == PZ_OK)
-            energy_written = 1;
-    }
-    for (; committed < count && status == PZ_OK; ++committed)
-        if ((status = pz_output_commit(&files[committed], ctx)) != PZ_OK)
-            break;
-    if (status != PZ_OK) {
-        /* Abort is a no-op on an output never opened or already committed (its fields are cleared). */
-        for (int i = 0; i < count; ++i)
-            pz_output_abort(&files[i]);
-        for (int i = 0; i < committed; ++i)
-            remove(paths[i]);
-        if (energy_written)
-            remove(energy_path);
+    pl_folder hidden;
+    memset(&hidden, 0, sizeof hidden);
+    hidden.lock_fd = -1;
+    pz_status status = pz_output_folder_check(folder, ctx);
+    if (status == PZ_OK)
+        status = make_parent(folder, &dirs, ctx);
+    if (status == PZ_OK)
+        status = pl_folder_begin(folder, &hidden, ctx);
+    if (status == PZ_OK)
+        status = write_all(&w, hidden.hidden, folder, energy_wanted, names, &name_count, ctx);
+    if (status == PZ_OK)
+        status = pz_check_cancel(ctx, "write");
+    if (status == PZ_OK)
+        status = pl_folder_commit(&hidden, names, name_count, ctx);
+    pl_folder_end(&hidden); /* removes the hidden folder unless it was swapped in */
+    if (status != PZ_OK)
         remove_created_dirs(&dirs);
-    }
-    free(energy_path);
     forget_created_dirs(&dirs);
-    for (int i = 0; i < count; ++i)
-        free(paths[i]);
     if (status == PZ_OK && report_text) {
         *report_text = w.report_text;
         w.report_text = NULL;

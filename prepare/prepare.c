@@ -277,6 +277,14 @@ static pz_status run_prepare(const pz_mesh *mesh, const pz_prepare_options *opti
     }
     if (!status && need != PREP_NEED_NOTHING) {
         status = prep_remesh_all(work, &seams, name, &plan, why, result, &state, ctx);
+        if (status == PZ_ERR_USAGE && automatic) {
+            /* The automatic mode chose the density itself: a mesh too coarse or too small to remesh at it (a
+             * two-triangle quad) is kept as it is, never a usage error the user did not make. */
+            snprintf(why, sizeof why, "auto: not remeshed: %.200s", ctx->error);
+            pz_mesh_free(&result->mesh);
+            status = PZ_OK;
+            need = PREP_NEED_NOTHING;
+        }
         if (!status && automatic && need == PREP_NEED_DENSITY && !report->within_bound)
             status = prep_retry_denser(work, &seams, name, &plan, work_shaped, why, sizeof why, &undone, result, &state,
                                        ctx);

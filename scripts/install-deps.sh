@@ -14,6 +14,9 @@ packages=(
   libcjson-dev            # JSON reports and JSON inputs
   libcairo2-dev           # pattern.pdf and pattern-tiled.pdf
   python3-ezdxf librsvg2-bin poppler-utils   # tests read our DXF, SVG and PDF with real readers
+  # The measuring tools (bench/bench_layouts, ../shared/tools/seamscore.py, gtpattern.py, render.py)
+  # run under /usr/bin/python3 and need these; nothing panelize builds or tests links them.
+  python3-numpy python3-scipy python3-matplotlib
   clang libclang-rt-14-dev  # libFuzzer targets
 )
 

@@ -160,6 +160,7 @@ static pz_status evaluate_one(const seg_layout *layout, int32_t p, seg_goal_scra
         out->failures = PZ_GOAL_NOT_INJECTIVE;
         out->max_abs_strain = -1;
         out->min_dart_opening_deg = -1;
+        out->min_width_mm = out->area_share = out->across_grain_mm = out->min_dart_intake_mm = -1;
         out->boundary_loops = 1;
         status = PZ_OK;
     }

@@ -255,7 +255,7 @@ pz_status seg_fallback_cuts(seg_layout *layout, int32_t *inserted, pz_ctx *ctx)
         }
         int32_t skipped = 0;
         for (int32_t p = 0; p < panels; ++p) {
-            if (!layout->panel_goals[p].failures)
+            if (!(layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS))
                 continue;
             if (!both_sides && seg_panel_mirrored_side(layout, p)) {
                 ++skipped;

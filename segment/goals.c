@@ -26,6 +26,10 @@
  *     a turn corner must be the largest turn within that window and lie
  *     farther than the window from every junction corner (one geometric
  *     corner counts once).
+ *  3b. Piece shape (docs/segment.md, "Piece shapes"): the panel's share of
+ *     the garment's area and its width (pz_piece_width over the opened
+ *     panel), and whether the input forces them (a whole component; narrow
+ *     by its border rather than by a seam).
  *  4. Strain and injectivity, only for a disk within the corner bound (a
  *     panel failing those must be split anyway): the panel is extracted (its
  *     vertices split at pinches only), turned into a one-panel pz_pattern
@@ -33,7 +37,8 @@
  *     with the dart term), flattened by pz_param_textile (few iterations,
  *     one thread: callers evaluate panels in parallel) and measured with
  *     pz_metrics_compute: the worst |warp| or |weft| strain, flipped
- *     triangles and boundary self-intersections.
+ *     triangles and boundary self-intersections, the extent across the
+ *     grain and the darts' intakes.
  *
  * Cost: O(F_panel) for 1-3 plus the flood fills of the neighbouring panels
  * (O(F) at worst, scratch of O(F) per call), and the flattening (a few
@@ -110,6 +115,8 @@ struct seg_goal_scratch {
     uint64_t clock;
     const pz_mesh *kept_mesh;
     pz_goal_options kept_options;
+    const pz_mesh *area_mesh;   /* the mesh garment_area was measured on (one mesh per layout) */
+    double garment_area;
 };
 
 seg_goal_scratch *seg_goal_scratch_new(int32_t face_count)
@@ -589,6 +596,28 @@ static double min_dart_opening(const pz_pattern *pattern, const double *uv)
     return smallest;
 }
 
+/* The smallest intake over the pattern's darts (metrics of its flattening), -1 without darts. */
+static double min_dart_intake(const pz_metrics *metrics)
+{
+    double smallest = -1;
+    for (int32_t d = 0; d < metrics->dart_count; ++d)
+        if (smallest < 0 || metrics->darts[d].intake_mm < smallest)
+            smallest = metrics->darts[d].intake_mm;
+    return smallest;
+}
+
+/* The flattened panel's extent across the grain: the warp runs along v (param/param.h), so the extent in u,
+ * which must fit the fabric's width when the piece lies grain-true on it. */
+static double across_grain(const pz_pattern *pattern, const double *uv)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v) {
+        lo = fmin(lo, uv[2 * v]);
+        hi = fmax(hi, uv[2 * v]);
+    }
+    return hi >= lo ? hi - lo : 0;
+}
+
 /* The textile set-up of the disk panel (panel_mesh, one-panel pattern, pz_textile_setup) into *kept. */
 static pz_status kept_setup(panel_walk *w, const pz_goal_options *options, kept_panel *kept, pz_ctx *ctx)
 {
@@ -704,6 +733,8 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
     if (!status && kept->measured) {
         out->darts = kept->figures.darts;
         out->min_dart_opening_deg = kept->figures.min_dart_opening_deg;
+        out->min_dart_intake_mm = kept->figures.min_dart_intake_mm;
+        out->across_grain_mm = kept->figures.across_grain_mm;
         out->max_abs_strain = kept->figures.max_abs_strain;
         out->flipped_triangles = kept->figures.flipped_triangles;
         out->boundary_self_intersections = kept->figures.boundary_self_intersections;
@@ -728,6 +759,8 @@ static pz_status flatten_panel(panel_walk *w, const pz_goal_options *options, pz
     if (!status) {
         out->darts = pattern->dart_count;
         out->min_dart_opening_deg = min_dart_opening(pattern, uv);
+        out->min_dart_intake_mm = min_dart_intake(metrics);
+        out->across_grain_mm = across_grain(pattern, uv);
         out->max_abs_strain = worst_strain;
         for (int32_t p = 0; p < metrics->panel_count; ++p) {
             out->flipped_triangles += metrics->panels[p].flipped_triangles;
@@ -757,6 +790,94 @@ static void walk_free(panel_walk *w)
     free(w->on_outline);
 }
 
+static double face_area(const pz_mesh *mesh, int32_t f)
+{
+    const int32_t *v = mesh->faces + 3 * f;
+    const double *a = mesh->positions + 3 * v[0], *b = mesh->positions + 3 * v[1], *c = mesh->positions + 3 * v[2];
+    double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]};
+    return 0.5 * sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+}
+
+/* The garment's area (all its faces), measured once per mesh and scratch. */
+static double garment_area(panel_walk *w)
+{
+    seg_goal_scratch *scratch = w->scratch;
+    if (scratch->area_mesh != w->mesh) {
+        scratch->garment_area = 0;
+        for (int32_t f = 0; f < w->mesh->face_count; ++f)
+            scratch->garment_area += face_area(w->mesh, f);
+        scratch->area_mesh = w->mesh;
+    }
+    return scratch->garment_area;
+}
+
+/* The opened panel's width (pz_piece_width) from its whole outline, or with seams_only from the outline
+ * half-edges that have a panel across (seams and slits), over its corner classes (join_corners(w, 1) done). */
+static pz_status opened_width(panel_walk *w, int seams_only, double *width, pz_ctx *ctx)
+{
+    int32_t corners = 3 * w->count, vertex_count = 0;
+    int32_t *vertex_of = malloc((size_t)corners * sizeof(int32_t) + 1);
+    int32_t *faces = malloc((size_t)corners * sizeof(int32_t) + 1);
+    double *points = malloc((size_t)corners * 3 * sizeof(double) + 1);
+    uint8_t *source = calloc((size_t)corners + 1, 1);
+    pz_status status = PZ_OK;
+    if (!vertex_of || !faces || !points || !source)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "segment goals: out of memory");
+    for (int32_t c = 0; !status && c < corners; ++c)
+        if (find_root(w->corner_root, c) == c) {
+            memcpy(points + 3 * vertex_count, position(w, 3 * w->face_ids[c / 3] + c % 3), 3 * sizeof(double));
+            vertex_of[c] = vertex_count++;
+        }
+    for (int32_t c = 0; !status && c < corners; ++c) {
+        faces[c] = vertex_of[find_root(w->corner_root, c)];
+        int32_t h = 3 * w->face_ids[c / 3] + c % 3;
+        if (w->on_outline[c] && (!seams_only || w->topology->twin[h] >= 0)) {
+            source[vertex_of[find_root(w->corner_root, c)]] = 1;
+            source[vertex_of[find_root(w->corner_root, 3 * (c / 3) + (c + 1) % 3)]] = 1;
+        }
+    }
+    if (!status)
+        status = pz_piece_width(vertex_count, points, 3, w->count, faces, source, width, ctx);
+    free(vertex_of);
+    free(faces);
+    free(points);
+    free(source);
+    return status;
+}
+
+/*
+ * The panel's shape (docs/segment.md, "Piece shapes"): its share of the garment's area and its width. A
+ * whole component (no panel across its outline) is as small and narrow as the input made it. Another
+ * panel is narrow by the input's own boundary when it reaches at least min_piece_width_mm away from its
+ * seams and slits: then what makes it narrow is its border on both sides (a strap, the garment's own
+ * narrow part), not a seam the layout cut (a band between a seam and the hem, however long, is narrow
+ * by that seam).
+ */
+static pz_status measure_shape(panel_walk *w, const pz_goal_options *options, pz_goal_result *out, pz_ctx *ctx)
+{
+    double area = 0, total = garment_area(w);
+    int whole = 1;
+    for (int32_t i = 0; i < w->count; ++i) {
+        area += face_area(w->mesh, w->face_ids[i]);
+        for (int k = 0; k < 3; ++k) {
+            int32_t t = w->topology->twin[3 * w->face_ids[i] + k];
+            whole &= t < 0 || w->local[pz_he_face(t)] >= 0;
+        }
+    }
+    out->area_share = total > 0 ? area / total : -1;
+    out->area_forced = out->width_forced = whole;
+    if (options->min_piece_width_mm <= 0)
+        return PZ_OK;
+    pz_status status = opened_width(w, 0, &out->min_width_mm, ctx);
+    if (status || whole || !(out->min_width_mm < options->min_piece_width_mm))
+        return status;
+    double from_seams = 0;  /* twice the farthest reach from the seams */
+    status = opened_width(w, 1, &from_seams, ctx);
+    out->width_forced = !status && from_seams >= 2 * options->min_piece_width_mm;
+    return status;
+}
+
 /* Steps 1-3, then 4 when the panel is a disk within the corner bound. */
 static pz_status evaluate_walk(panel_walk *w, const pz_goal_options *options, pz_goal_result *out, pz_ctx *ctx)
 {
@@ -768,9 +889,16 @@ static pz_status evaluate_walk(panel_walk *w, const pz_goal_options *options, pz
     if (!walk_outline(w, TURN_WINDOW_EDGES * mean_edge(w), &out->boundary_loops, &out->corners))
         return pz_error(ctx, PZ_ERR_NOMEM, "segment goals: out of memory");
     out->disk = components == 1 && out->boundary_loops == 1 && euler == 1;
+    pz_status status = measure_shape(w, options, out, ctx);
+    if (status)
+        return status;
     out->failures = pz_goal_judge(options, out);
-    /* A panel that fails on topology or corners must be split anyway: flattening it would only cost. */
-    return out->failures || options->textile_iterations < 0 ? PZ_OK : flatten_panel(w, options, out, ctx);
+    /* A panel that fails on topology or corners must be split anyway: flattening it would only cost. One
+     * under a shape goal is flattened all the same: whether it meets S steers the layout as before (a
+     * sliver on the way is usually merged again by the removal; docs/segment.md, "Piece shapes"). */
+    if ((out->failures & (PZ_GOAL_NOT_DISK | PZ_GOAL_CORNERS)) || options->textile_iterations < 0)
+        return PZ_OK;
+    return flatten_panel(w, options, out, ctx);
 }
 
 pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint8_t *edge_cut,
@@ -786,6 +914,8 @@ pz_status seg_goals(const pz_mesh *mesh, const pz_topology *topology, const uint
     out->max_abs_strain = -1;
     out->max_seam_mismatch = -1;
     out->min_dart_opening_deg = -1;
+    out->area_share = out->min_width_mm = -1;
+    out->across_grain_mm = out->min_dart_intake_mm = -1;
     panel_walk w;
     memset(&w, 0, sizeof w);
     w.mesh = mesh, w.topology = topology, w.edge_cut = edge_cut, w.face_ids = face_ids, w.face_panel = face_panel;
@@ -831,6 +961,9 @@ void pz_goal_options_default(pz_goal_options *goals)
     goals->max_strain = 0.05;
     goals->grain[2] = 1;
     goals->max_seam_mismatch = 0.005;
+    goals->min_piece_width_mm = 40;
+    goals->min_piece_area = 0.01;
+    goals->min_dart_intake_mm = 6;
 }
 
 /* C when the options leave it 0 (the default's). */
@@ -859,6 +992,17 @@ unsigned pz_goal_judge(const pz_goal_options *goals, const pz_goal_result *figur
     if (goals->max_seam_mismatch > 0 && !(figures->max_seam_mismatch <= goals->max_seam_mismatch) &&
         !(figures->max_seam_mismatch < 0))
         failures |= PZ_GOAL_SEAM_MISMATCH;
+    if (!figures->width_forced && goals->min_piece_width_mm > 0 && figures->min_width_mm >= 0 &&
+        figures->min_width_mm < goals->min_piece_width_mm)
+        failures |= PZ_GOAL_NARROW;
+    if (!figures->area_forced && goals->min_piece_area > 0 && figures->area_share > 0 &&
+        figures->area_share < goals->min_piece_area)
+        failures |= PZ_GOAL_SMALL;
+    if (goals->max_piece_width_mm > 0 && figures->across_grain_mm > goals->max_piece_width_mm)
+        failures |= PZ_GOAL_FABRIC_WIDTH;
+    if (goals->min_dart_intake_mm > 0 && figures->darts > 0 && figures->min_dart_intake_mm >= 0 &&
+        figures->min_dart_intake_mm < goals->min_dart_intake_mm)
+        failures |= PZ_GOAL_DART_INTAKE;
     return failures;
 }
 
@@ -902,6 +1046,15 @@ void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *optio
     if (result->failures & PZ_GOAL_SEAM_MISMATCH)
         APPEND("seam mismatch %.2g%% > %g%%", 100 * result->max_seam_mismatch,
                100 * (options ? options->max_seam_mismatch : 0));
+    if (result->failures & PZ_GOAL_NARROW)
+        APPEND("%.3g mm wide < %g mm", result->min_width_mm, options ? options->min_piece_width_mm : 0);
+    if (result->failures & PZ_GOAL_SMALL)
+        APPEND("%.2g%% of the area < %g%%", 100 * result->area_share, 100 * (options ? options->min_piece_area : 0));
+    if (result->failures & PZ_GOAL_FABRIC_WIDTH)
+        APPEND("%.0f mm across the grain > %g mm of fabric", result->across_grain_mm,
+               options ? options->max_piece_width_mm : 0);
+    if (result->failures & PZ_GOAL_DART_INTAKE)
+        APPEND("dart intake %.2g mm < %g mm", result->min_dart_intake_mm, options ? options->min_dart_intake_mm : 0);
     if (result->failures & PZ_GOAL_VETOED)
         APPEND("failed in the joint flattening");
 #undef APPEND

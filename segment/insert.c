@@ -31,9 +31,11 @@
 #define MAX_INSERTIONS_PER_LEVEL 64
 /* The insertion key is weight x min(distance, far enough), weight = (1 - PREFERENCE_WEIGHT +
  * PREFERENCE_WEIGHT x preference) x (1 + alignment) / 2 (docs/segment.md, "Where seams go"). Far enough:
- * FAR_ENOUGH_MM (a strip between two parallel seams that far apart is a piece of sound width), or
+ * FAR_ENOUGH_WIDTHS times the minimum piece width, at least FAR_ENOUGH_MM (a seam whose mean distance from
+ * another is that far keeps the strip between them wider than a sliver where the two waver together), or
  * FAR_ENOUGH_REL of the bounding-box diagonal on a small model. */
 #define FAR_ENOUGH_MM 60.0
+#define FAR_ENOUGH_WIDTHS 2.5
 #define FAR_ENOUGH_REL 0.1
 #define PREFERENCE_WEIGHT 0.75
 /* A candidate preferred less than this is a seam of last resort: a removal pass comes first. */
@@ -52,11 +54,11 @@ static pz_status nomem(pz_ctx *ctx)
     return pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
 }
 
-/* A panel the insertion splits: 1 when it misses a goal, 2 when it is only a band round the body
- * (segment/preference.c), 0 otherwise. */
+/* A panel the insertion splits: 1 when it misses a goal a split mends (PZ_GOAL_SPLIT_MENDS: not the piece
+ * shapes), 2 when it is only a band round the body (segment/preference.c), 0 otherwise. */
 static int needs_split(const seg_layout *layout, int32_t p)
 {
-    return layout->panel_goals[p].failures != 0 ? 1 : seg_panel_is_band(layout, p) ? 2 : 0;
+    return (layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS) ? 1 : seg_panel_is_band(layout, p) ? 2 : 0;
 }
 
 static int32_t failing_panels(const seg_layout *layout)
@@ -67,12 +69,13 @@ static int32_t failing_panels(const seg_layout *layout)
     return failing;
 }
 
-/* Panels that miss a goal (bands alone get no fallback cut: it would not be a seam a pattern maker draws). */
+/* Panels that miss a goal a split mends (bands alone get no fallback cut: it would not be a seam a pattern
+ * maker draws). */
 static int32_t goal_failing_panels(const seg_layout *layout)
 {
     int32_t failing = 0;
     for (int32_t p = 0; p < layout->panel_count; ++p)
-        failing += layout->panel_goals[p].failures != 0;
+        failing += (layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS) != 0;
     return failing;
 }
 
@@ -290,6 +293,19 @@ static pz_status make_candidates(seg_layout *layout, pz_trace_paths *traced, seg
     return status;
 }
 
+/* 1 when the panels to split all fail on their corners and nothing else a split mends. */
+static int corners_only(const seg_layout *layout)
+{
+    int any = 0;
+    for (int32_t p = 0; p < layout->panel_count; ++p) {
+        unsigned failures = layout->panel_goals[p].failures & PZ_GOAL_SPLIT_MENDS;
+        if (failures & ~(unsigned)PZ_GOAL_CORNERS)
+            return 0;
+        any |= failures != 0;
+    }
+    return any;
+}
+
 /* 1 when a piece budget is set, the panels are at least that many and every one is a disk. */
 static int budget_reached(const seg_layout *layout)
 {
@@ -336,7 +352,10 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
     /* The distance covers paths[0 .. measured - 1]; each round adds the paths inserted since (-1: none yet). */
     int32_t measured = -1;
     /* Farther than this from every inserted path, a candidate is as good as any other: its preference decides. */
-    double far_enough = fmin(FAR_ENOUGH_MM, FAR_ENOUGH_REL * layout->frame.diagonal);
+    double far_enough = fmin(fmax(FAR_ENOUGH_MM, FAR_ENOUGH_WIDTHS * layout->goals.min_piece_width_mm),
+                             FAR_ENOUGH_REL * layout->frame.diagonal);
+    /* Nearer than the minimum piece width (on average) to the paths in, a candidate leaves a sliver. */
+    double too_near = layout->goals.min_piece_width_mm;
     int tidied = 0; /* 1: the removal pass before the first weak candidate ran */
     for (int round = 0; round < MAX_INSERTIONS_PER_LEVEL && !status; ++round) {
         if ((status = pz_check_cancel(ctx, "segment")) || (status = seg_evaluate_panels(layout, NULL, ctx)))
@@ -369,6 +388,8 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
             if (!helps(layout, c))
                 continue;
             double d = pz_trace_path_mean_distance(&c->path, distance);
+            if (d < too_near)
+                continue; /* the strip between it and an inserted path would be a sliver */
             int strong = c->preference.score >= WEAK_PREFERENCE;
             double key = c->weight * fmin(d, strong ? far_enough : layout->frame.diagonal);
             if (strong < best_strong || (strong == best_strong && !(key > best_key || (key == best_key && d > best_distance))))
@@ -389,10 +410,10 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
          * panel is a disk: the budget merges down, and strain is what it trades. */
         if (!best_strong && budget_reached(layout))
             break;
-        /* Before the first seam a pattern maker would not draw, the redundant cuts go (small pieces left
-         * between parallel seams, their junctions): they can be why a large panel fails on corners. Once:
-         * a pass costs a trial per segment. */
-        if (candidates[best].preference.score < WEAK_PREFERENCE && !tidied) {
+        /* Before the first seam a pattern maker would not draw, when panels fail on corners alone, the
+         * redundant cuts go (small pieces left between parallel seams, their junctions): they can be why a
+         * large panel has too many corners. Once: a pass costs a trial per segment. */
+        if (candidates[best].preference.score < WEAK_PREFERENCE && !tidied && corners_only(layout)) {
             int32_t removed = 0;
             tidied = 1;
             status = seg_remove_pass(layout, &removed, ctx);

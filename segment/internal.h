@@ -194,6 +194,10 @@ pz_status seg_segments_build(const seg_layout *layout, seg_segments *out, pz_ctx
 void seg_segments_clear(seg_segments *segments);
 pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx);
 pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx);
+/* Merges every panel that misses a piece-shape goal (PZ_GOAL_SHAPE) into a neighbour, even when the merged
+ * panel then misses the strain goal (docs/segment.md, "Piece shapes"); *merged: the seams removed. */
+pz_status seg_merge_slivers(seg_layout *layout, int32_t *merged, pz_ctx *ctx);
+
 /* A set of edges changed together (a segment or part of it, plus its mirror image). */
 typedef struct seg_edge_set {
     int32_t count;

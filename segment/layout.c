@@ -132,6 +132,10 @@ static pz_status remove_and_dart(seg_layout *layout, pz_segment_result *result, 
         if (darts == 0)
             break;
     }
+    double start = pz_seconds();
+    if (!status)
+        status = seg_merge_slivers(layout, &result->merged_slivers, ctx);
+    result->remove_ms += 1e3 * (pz_seconds() - start);
     return status;
 }
 
@@ -332,6 +336,10 @@ void pz_segment_options_default(pz_segment_options *options)
     pz_goal_options_default(&goals);
     options->max_corners = goals.max_corners;
     options->max_strain = goals.max_strain;
+    options->min_piece_width_mm = goals.min_piece_width_mm;
+    options->min_piece_area = goals.min_piece_area;
+    options->max_piece_width_mm = goals.max_piece_width_mm;
+    options->min_dart_intake_mm = goals.min_dart_intake_mm;
     options->symmetry = PZ_SYMMETRY_AUTO;
     options->darts = 1;
     options->grain[2] = 1;
@@ -372,6 +380,9 @@ static pz_status check_options(const pz_segment_options *options, pz_ctx *ctx)
     if (!(options->max_strain >= 0) || options->max_corners < 0 || options->max_candidates < 0 || options->max_pieces < 0 ||
         options->max_depth < 0 || options->threads < 0)
         return pz_error(ctx, PZ_ERR_USAGE, "segment: negative strain, corner, candidate, depth or thread option");
+    if (!(options->min_piece_width_mm >= 0) || !(options->min_piece_area >= 0 && options->min_piece_area < 1) ||
+        !(options->max_piece_width_mm >= 0) || !(options->min_dart_intake_mm >= 0))
+        return pz_error(ctx, PZ_ERR_USAGE, "segment: a piece-shape goal is negative (or an area share not below 1)");
     double g = pz_vec3_norm(options->grain);
     if (!(g > 0))
         return pz_error(ctx, PZ_ERR_USAGE, "segment: the grain axis is zero");
@@ -390,6 +401,10 @@ static pz_status layout_init(seg_layout *layout, const pz_mesh *mesh, const pz_t
     pz_goal_options_default(&defaults);
     layout->goals.max_corners = options->max_corners > 0 ? options->max_corners : defaults.max_corners;
     layout->goals.max_strain = options->max_strain;
+    layout->goals.min_piece_width_mm = options->min_piece_width_mm;
+    layout->goals.min_piece_area = options->min_piece_area;
+    layout->goals.max_piece_width_mm = options->max_piece_width_mm;
+    layout->goals.min_dart_intake_mm = options->min_dart_intake_mm;
     layout->accept_strain = (1 - options->strain_margin) * options->max_strain;
     double g = pz_vec3_norm(options->grain);
     for (int k = 0; k < 3; ++k)

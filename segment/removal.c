@@ -26,10 +26,16 @@
  * Limits (Sec. 3.1): the open part at least DART_MIN_PIECES pieces and at
  * most DART_MAX_EXTENT_FRACTION of the merged panel's extent (its
  * bounding-box diagonal: "the dart length usually should not exceed a
- * fraction of the patch length"), and every dart of the panel opening by at
+ * fraction of the patch length"), every dart of the panel opening by at
  * least DART_MIN_OPENING_DEG in the flattening ("opening angles sufficiently
- * large"). A dart adds no corner (segment/goals.c), so re-gluing part of a
- * seam is judged on strain and injectivity, as a pattern maker would.
+ * large") and taking in min_dart_intake_mm at its mouth (a goal of the
+ * judge), and the panel's strain below that of the segment fully glued (a
+ * dart takes in fabric where the closed seam strains it). A dart adds no
+ * corner (segment/goals.c), so re-gluing part of a seam is judged on strain
+ * and injectivity, as a pattern maker would.
+ *
+ * Slivers: what is left under a piece-shape goal at the end is merged into a
+ * neighbour, trading strain alone (seg_merge_slivers, below).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -257,9 +263,12 @@ static pz_status panels_pass(seg_layout *layout, const seg_edge_set *set, unsign
     return status;
 }
 
+/* Every goal but the piece shapes: merging panels never makes one narrower or smaller (its largest circle
+ * and its area only grow), so a panel next to the set that misses them (a sketch's sliver) blocks nothing;
+ * and no band round the body (segment/preference.c). */
 static pz_status panels_ok(seg_layout *layout, const seg_edge_set *set, int *ok, pz_ctx *ctx)
 {
-    return panels_pass(layout, set, ~0u, 1, ok, ctx);
+    return panels_pass(layout, set, ~(unsigned)PZ_GOAL_SHAPE, 1, ok, ctx);
 }
 
 /*
@@ -587,9 +596,11 @@ static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double
         max_leg = DART_MAX_EXTENT_FRACTION * merged_extent(layout, a, b);
     }
     pz_goal_result goals;
+    memset(&goals, 0, sizeof goals);
     int ok = 0;
     if (!status && worth && !(status = measure_glued(layout, edges, n, edges[0], &ok, &goals, ctx)))
         worth = dart_hopeful(layout, &goals);
+    double glued_strain = goals.max_abs_strain;  /* with the whole segment glued: the dart must lower it */
     int32_t best = 0;
     for (int32_t k = pieces - DART_MIN_PIECES; worth && k >= 1 && !status && best == 0; --k) {
         int32_t glued = (int32_t)((int64_t)k * n / pieces);
@@ -597,7 +608,8 @@ static pz_status try_dart(seg_layout *layout, const seg_segment *s, const double
             break; /* longer still for smaller k */
         if ((status = measure_glued(layout, edges, glued, edges[glued], &ok, &goals, ctx)))
             break;
-        if (ok && (goals.darts == 0 || goals.min_dart_opening_deg >= DART_MIN_OPENING_DEG))
+        if (ok && (goals.darts == 0 || goals.min_dart_opening_deg >= DART_MIN_OPENING_DEG) &&
+            goals.max_abs_strain < glued_strain)
             best = glued;
         if (goals.failures & PZ_GOAL_NOT_DISK)
             break; /* the merged panel's topology does not depend on the dart's length */
@@ -659,5 +671,206 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
     free(visited);
     seg_segments_clear(&segments);
     free(defect);
+    return status;
+}
+
+/* ---------------------------------------------------------------- slivers */
+
+/* How the panels next to a removed segment fare: a merge is made only when unmended is 0 (it trades
+ * strain alone); of those, the fewest shapes still missed, then the lowest strain, win. */
+typedef struct merge_score {
+    int32_t shape;       /* panels still under a piece-shape goal */
+    int32_t unmended;    /* panels missing a goal other than strain and the shapes (corners, injectivity, ...) */
+    double strain;       /* the worst strain among them (INFINITY: one was not flattened) */
+} merge_score;
+
+static int merge_better(const merge_score *a, const merge_score *b)
+{
+    if (a->shape != b->shape)
+        return a->shape < b->shape;
+    return a->strain < b->strain;
+}
+
+/* Uncuts the set, scores the panels next to it and cuts it again; *ring = 1 when one is no disk. */
+static pz_status score_merge(seg_layout *layout, const seg_edge_set *set, merge_score *score, int *ring, pz_ctx *ctx)
+{
+    seg_edge_set_apply(layout, set, 0);
+    pz_status status = seg_label_panels(layout, ctx);
+    uint8_t *want = status ? NULL : calloc((size_t)layout->panel_count + 1, 1);
+    if (!status && !want)
+        status = nomem(ctx);
+    const pz_topology *t = layout->topology;
+    for (int32_t i = 0; want && i < set->count; ++i)
+        for (int s = 0; s < 2; ++s)
+            if (t->edge_halfedge[2 * set->edges[i] + s] >= 0)
+                want[layout->face_panel[pz_he_face(t->edge_halfedge[2 * set->edges[i] + s])]] = 1;
+    if (!status)
+        status = seg_evaluate_panels(layout, want, ctx);
+    *score = (merge_score){0, 0, 0};
+    *ring = 0;
+    for (int32_t p = 0; !status && p < layout->panel_count; ++p) {
+        if (!want[p])
+            continue;
+        const pz_goal_result *goals = &layout->panel_goals[p];
+        *ring |= (goals->failures & PZ_GOAL_NOT_DISK) != 0;
+        score->shape += (goals->failures & PZ_GOAL_SHAPE) != 0;
+        score->unmended += (goals->failures & ~(unsigned)(PZ_GOAL_SHAPE | PZ_GOAL_STRAIN)) != 0;
+        score->strain = fmax(score->strain, goals->max_abs_strain >= 0 ? goals->max_abs_strain : INFINITY);
+    }
+    free(want);
+    seg_edge_set_apply(layout, set, 1);
+    return status;
+}
+
+/* The sliver to merge next: the smallest panel missing a shape goal that has not been given up, or -1. */
+static int32_t next_sliver(const seg_layout *layout, const uint8_t *given_up)
+{
+    int32_t best = -1;
+    for (int32_t p = 0; p < layout->panel_count; ++p) {
+        int32_t size = layout->panel_offsets[p + 1] - layout->panel_offsets[p];
+        if ((layout->panel_goals[p].failures & PZ_GOAL_SHAPE) && !given_up[layout->panel_faces[layout->panel_offsets[p]]] &&
+            (best < 0 || size < layout->panel_offsets[best + 1] - layout->panel_offsets[best]))
+            best = p;
+    }
+    return best;
+}
+
+/*
+ * Adds to the set the cut chains it would leave dangling: uncut, an inner end of its edges with one cut
+ * edge left is a stub, and the chain from it up to the next node goes too (a slit that separates nothing:
+ * both its sides are the merged panel). 0 when out of memory.
+ */
+static int with_stubs(seg_layout *layout, seg_edge_set *set)
+{
+    const pz_topology *t = layout->topology;
+    int32_t capacity = set->count + 16;
+    int32_t *grown = realloc(set->edges, (size_t)capacity * sizeof(int32_t));
+    if (!grown)
+        return 0;
+    set->edges = grown;
+    int labels_valid = layout->labels_valid; /* the flags come back as they were */
+    seg_edge_set_apply(layout, set, 0);
+    int ok = 1;
+    for (int32_t i = 0; ok && i < set->count; ++i) {
+        int32_t h = t->edge_halfedge[2 * set->edges[i]];
+        int32_t ends[2] = {pz_he_from(t, h), pz_he_to(t, h)};
+        for (int k = 0; ok && k < 2; ++k)
+            for (int32_t v = ends[k]; !t->vertex_on_boundary[v] && seg_cut_degree(layout, v) == 1;) {
+                int32_t e = -1;
+                for (int32_t j = layout->vertex_edge_offsets[v]; j < layout->vertex_edge_offsets[v + 1] && e < 0; ++j)
+                    if (layout->edge_cut[layout->vertex_edges[j]])
+                        e = layout->vertex_edges[j];
+                if (layout->edge_owner[e] >= 0 && layout->paths[layout->edge_owner[e]].sketch)
+                    break; /* a sketch stays, stub or not */
+                if (set->count == capacity) {
+                    capacity *= 2;
+                    if (!(grown = realloc(set->edges, (size_t)capacity * sizeof(int32_t)))) {
+                        ok = 0;
+                        break;
+                    }
+                    set->edges = grown;
+                }
+                set->edges[set->count++] = e;
+                layout->edge_cut[e] = 0;
+                v = other_end(layout, e, v);
+            }
+    }
+    seg_edge_set_apply(layout, set, 1);
+    layout->labels_valid = labels_valid;
+    return ok;
+}
+
+/* 1 when segment s separates panel p from another panel (not p from itself). */
+static int bounds_panel(const seg_layout *layout, const seg_segment *s, int32_t p)
+{
+    const pz_topology *t = layout->topology;
+    int32_t h = t->edge_halfedge[2 * s->edges[0]], g = t->edge_halfedge[2 * s->edges[0] + 1];
+    if (g < 0)
+        return 0;
+    int32_t a = layout->face_panel[pz_he_face(h)], b = layout->face_panel[pz_he_face(g)];
+    return a != b && (a == p || b == p);
+}
+
+/* The best seam of panel p to remove (a set with its mirror image) into *best; best->edges NULL: none
+ * keeps the merged panels disks. */
+static pz_status best_merge(seg_layout *layout, int32_t p, seg_edge_set *best, pz_ctx *ctx)
+{
+    best->edges = NULL;
+    best->count = 0;
+    seg_segments segments;
+    pz_status status = seg_segments_build(layout, &segments, ctx);
+    merge_score best_score = {0, 0, 0};
+    for (int32_t i = 0; !status && i < segments.count; ++i) {
+        const seg_segment *s = segments.items + i;
+        if (s->sketch || !seg_all_cut(layout, s) || !bounds_panel(layout, s, p))
+            continue;
+        seg_edge_set set;
+        if (!seg_edge_set_make(layout, s->edges, s->edge_count, &set)) {
+            status = nomem(ctx);
+            break;
+        }
+        merge_score score;
+        int ring = 1;
+        if (!with_stubs(layout, &set))
+            status = nomem(ctx);
+        if (!status)
+            status = score_merge(layout, &set, &score, &ring, ctx);
+        if (!status && !ring && score.unmended == 0 && (!best->edges || merge_better(&score, &best_score))) {
+            free(best->edges);
+            *best = set;
+            best_score = score;
+        } else {
+            free(set.edges);
+        }
+        /* The labels of the cut flags as they were (score_merge relabelled the trial). */
+        if (!status)
+            status = seg_label_panels(layout, ctx);
+    }
+    seg_segments_clear(&segments);
+    return status;
+}
+
+/*
+ * A sliver is never the answer to a strain goal (docs/segment.md, "Piece shapes"): the greedy insertion
+ * may cut pieces under the minimum width or area on the way (its later removals usually merge them
+ * again), and what is left at the end is merged into a neighbour even when the merged panel then
+ * exceeds S: the layout says so rather than cut confetti. Only strain is traded: a merge that would miss
+ * another goal (a ring, too many corners, a flip) is not made. Of the merges left, the one whose panels
+ * meet every shape goal, then the one of lowest strain, is made; a sliver with none stays, reported
+ * narrow or small. Smallest first, one seam at a time (with its mirror image; a cut the removal would
+ * leave dangling goes with it).
+ */
+pz_status seg_merge_slivers(seg_layout *layout, int32_t *merged, pz_ctx *ctx)
+{
+    *merged = 0;
+    if (layout->goals.min_piece_width_mm <= 0 && layout->goals.min_piece_area <= 0)
+        return PZ_OK;
+    uint8_t *given_up = calloc((size_t)layout->topology->face_count + 1, 1);
+    if (!given_up)
+        return nomem(ctx);
+    pz_status status = PZ_OK;
+    for (int32_t guard = 0; !status && guard < layout->topology->face_count; ++guard) {
+        if ((status = pz_check_cancel(ctx, "segment")) || (status = seg_label_panels(layout, ctx)) ||
+            (status = seg_evaluate_panels(layout, NULL, ctx)))
+            break;
+        int32_t p = next_sliver(layout, given_up);
+        if (p < 0)
+            break;
+        seg_edge_set best;
+        if ((status = best_merge(layout, p, &best, ctx)))
+            break;
+        if (!best.edges) {
+            for (int32_t i = layout->panel_offsets[p]; i < layout->panel_offsets[p + 1]; ++i)
+                given_up[layout->panel_faces[i]] = 1;
+            continue;
+        }
+        seg_edge_set_apply(layout, &best, 0);
+        free(best.edges);
+        ++*merged;
+        seg_progress(layout, "merge slivers", ctx);
+    }
+    free(given_up);
+    if (!status)
+        status = seg_label_panels(layout, ctx);
     return status;
 }

@@ -24,7 +24,12 @@
  *    the outline is taken with its darts closed: a dart adds no corner;
  *  - its flattening (LSCM start + a few textile iterations, grain given) is
  *    injective and every triangle's warp and weft strain lies within
- *    +-max_strain.
+ *    +-max_strain;
+ *  - piece shapes: at least min_piece_width_mm wide and min_piece_area of
+ *    the garment's area unless the input makes it so, at most
+ *    max_piece_width_mm across the grain, every dart taking in at least
+ *    min_dart_intake_mm (a split never answers a shape goal: pieces left
+ *    under one are merged into a neighbour at the end, even over S).
  *
  * Conventions of mesh/mesh.h. Deterministic: the result never depends on
  * the thread count or timing.
@@ -98,8 +103,20 @@ enum pz_goal_failure {
     PZ_GOAL_STRAIN = 1u << 2,
     PZ_GOAL_NOT_INJECTIVE = 1u << 3,
     PZ_GOAL_VETOED = 1u << 4,    /* the caller's final flattening rejected this panel (pz_segment_options.vetoed) */
-    PZ_GOAL_SEAM_MISMATCH = 1u << 5  /* a seam's or dart's two sides differ by more than max_seam_mismatch */
+    PZ_GOAL_SEAM_MISMATCH = 1u << 5, /* a seam's or dart's two sides differ by more than max_seam_mismatch */
+    PZ_GOAL_NARROW = 1u << 6,        /* narrower than min_piece_width_mm, and not because the input is narrow there */
+    PZ_GOAL_SMALL = 1u << 7,         /* under min_piece_area of the garment's area, and not a whole component */
+    PZ_GOAL_FABRIC_WIDTH = 1u << 8,  /* wider across the grain than max_piece_width_mm (the fabric's width) */
+    PZ_GOAL_DART_INTAKE = 1u << 9    /* a dart takes in less than min_dart_intake_mm at its mouth */
 };
+
+/* The failures a split can mend: the layout splits a panel that has one of these (docs/segment.md). */
+#define PZ_GOAL_SPLIT_MENDS                                                                                     \
+    (PZ_GOAL_NOT_DISK | PZ_GOAL_CORNERS | PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED |             \
+     PZ_GOAL_FABRIC_WIDTH)
+/* The piece-shape failures a split can only make worse: a split that would cause one is rejected, and a
+ * panel that has one is reported, never split further (a sliver is never the answer to a strain goal). */
+#define PZ_GOAL_SHAPE (PZ_GOAL_NARROW | PZ_GOAL_SMALL)
 
 /**
  * The goals every panel is judged by (pietroni2022 Sec. 3.1, plus the seam
@@ -114,9 +131,15 @@ typedef struct pz_goal_options {
                                     < 0: shape only (disk and corners), no flattening */
     double max_seam_mismatch;    /* relative length difference of a seam's or dart's two sides; default 0.005;
                                     judged on the final pattern (an evaluation has no partner panels) */
+    /* Piece shapes (docs/segment.md, "Piece shapes"); 0 = not judged. */
+    double min_piece_width_mm;   /* no piece narrower (twice its largest inscribed distance); default 40 */
+    double min_piece_area;       /* no piece smaller, as a share of the garment's area; default 0.01 */
+    double max_piece_width_mm;   /* no piece wider across the grain (the fabric's usable width); default 0:
+                                    panelize run sets it from the fabric width less twice the allowance */
+    double min_dart_intake_mm;   /* every dart opens at least this much at its mouth; default 6 */
 } pz_goal_options;
 
-/** C = 8, S = 0.05, seam mismatch 0.5 %, grain +z. */
+/** C = 8, S = 0.05, seam mismatch 0.5 %, grain +z, pieces 40 mm wide and 1 % of the area, darts 6 mm. */
 void pz_goal_options_default(pz_goal_options *goals);
 
 /** One panel's figures and the goals it misses. */
@@ -131,6 +154,15 @@ typedef struct pz_goal_result {
     double max_seam_mismatch;    /* worst relative mismatch of the panel's seams and darts (-1: not measured) */
     int32_t darts;               /* dart slits of the panel (a slit with a tip inside) */
     double min_dart_opening_deg; /* smallest opening angle at a dart tip in the flattening, -1 none or not flattened */
+    /* Piece shape (docs/segment.md, "Piece shapes"): not judged when -1 (not measured); an area share of 0
+     * neither (no real panel has none). */
+    double area_share;           /* the panel's area / the garment's */
+    double min_width_mm;         /* twice the largest distance from the outline inside the panel */
+    int width_forced;            /* 1: narrow because the input is (a whole component, or measured from its
+                                    seams alone it is at least min_piece_width_mm wide): not judged narrow */
+    int area_forced;             /* 1: a whole component of the garment: not judged small */
+    double across_grain_mm;      /* the flattened piece's extent across the grain (-1 not flattened) */
+    double min_dart_intake_mm;   /* the smallest opening of a dart at its mouth in the flattening (-1 none) */
 } pz_goal_result;
 
 /**
@@ -154,6 +186,18 @@ pz_status pz_segment_goals(const pz_mesh *mesh, const pz_topology *topology, con
                            const int32_t *face_ids, int32_t count, const pz_goal_options *options,
                            pz_goal_result *out, pz_ctx *ctx);
 
+/**
+ * The width of a piece (docs/segment.md, "Piece shapes"): twice the largest
+ * distance from its outline inside it, propagated over the edges of the
+ * triangles `faces` (face_count x 3 ids below vertex_count) with the straight
+ * distance to the outline vertex each vertex is reached from. points:
+ * vertex_count x dim (2: a flattened piece, 3: a panel on the garment);
+ * source[v] = 1 for the outline's vertices. *width = INFINITY when no vertex
+ * is a source (a closed surface). O(E log V). Errors: PZ_ERR_USAGE, PZ_ERR_NOMEM.
+ */
+pz_status pz_piece_width(int32_t vertex_count, const double *points, int dim, int32_t face_count,
+                         const int32_t *faces, const uint8_t *source, double *width, pz_ctx *ctx);
+
 /** "not a disk, 11 corners > 8, strain 0.071 > 0.05, 3 flipped triangles, seam mismatch 0.8% > 0.5%" into buf
  * (goals met: "ok"). */
 void pz_goal_describe(const pz_goal_result *result, const pz_goal_options *options, char *buf, size_t size);
@@ -168,6 +212,9 @@ typedef struct pz_segment_cache pz_segment_cache;
 typedef struct pz_segment_options {
     int32_t max_corners;         /* C; 0 = 8 */
     double max_strain;           /* S (>= 0; pz_segment_options_default sets 0.05) */
+    /* The piece-shape goals of pz_goal_options (0: not judged; pz_segment_options_default sets the goals'
+     * defaults): a split that would cut a piece narrower or smaller is never made. */
+    double min_piece_width_mm, min_piece_area, max_piece_width_mm, min_dart_intake_mm;
     pz_symmetry_mode symmetry;   /* default AUTO */
     int darts;                   /* 1: insert darts (default), 0: none */
     double grain[3];             /* 3D warp axis (unit); pz_segment_options_default: +z */
@@ -268,6 +315,8 @@ typedef struct pz_segment_result {
     int32_t budget_merges;       /* seam segments removed to meet the budget */
     /* Counters and timings. */
     int32_t candidate_count, inserted_count, removed_count, evaluation_count;
+    int32_t merged_slivers;      /* seams removed at the end to merge a piece under the shape goals into a
+                                    neighbour (that may then miss S: a sliver is never the answer to S) */
     double graph_ms, candidates_ms, insert_ms, remove_ms, darts_ms, budget_ms, total_ms;
 } pz_segment_result;
 

@@ -294,11 +294,18 @@ assert 5 * heap['phase_one_relaxations'] <= full['phase_one_relaxations'], "heap
 assert heap['phase_one_energy'] > full['phase_one_energy'], "heap's phase one left no more energy than full's"
 assert abs(heap['final_energy'] - full['final_energy']) <= 1e-3 * full['final_energy'], "phase two ends apart"
 PY
-# All or nothing with energy.svg too: report.json cannot be written (a directory is in its way), so
-# energy.svg, already in place, is removed again with the rest.
+# A folder of someone else's files is refused before any work (a directory where report.json would go
+# included), and left as it was.
 mkdir -p locked/report.json
-expect_error 73 report.json -- flatten hemisphere.obj -o locked --backend springmass
-check "a failed springmass run left files behind" [ "$(ls locked)" = report.json ]
+expect_error 73 locked -- flatten hemisphere.obj -o locked --backend springmass
+check "a refused springmass run changed the folder" [ "$(ls -A locked)" = report.json ]
+# energy.svg is part of the set, and the set replaces an earlier one whole.
+run flatten hemisphere.obj -o hemi-set --backend springmass --quiet
+expect_ok "flatten --backend springmass into a new folder"
+check "energy.svg or the marker missing: $(ls -A hemi-set | tr '\n' ' ')" [ -f hemi-set/energy.svg -a -f hemi-set/.panelize ]
+run flatten hemisphere.obj -o hemi-set --quiet
+expect_ok "flatten again into the same folder with textile"
+check "energy.svg of the earlier run is still there" [ ! -e hemi-set/energy.svg ]
 run flatten hemisphere.obj -o hemi-ortho --backend springmass --fabric 0.946,0.548,0.159 --quiet
 expect_ok "flatten hemisphere --backend springmass --fabric"
 report_checks "springmass --fabric" hemi-ortho \

@@ -129,4 +129,30 @@ check "info unreferenced.obj: should be manifold with the note listed" \
 run check unreferenced.obj --quiet
 check "check unreferenced.obj: exit $rc" [ "$rc" -eq 0 ]
 
+# Inputs that are not regular files are refused at once (exit 66) instead of blocking for ever (a FIFO
+# with no writer) or reading without end (/dev/zero), and a large file that is not what its name says is
+# refused from its first bytes (exit 65) without being read whole.
+mkfifo fifo.obj fifo-pose.obj fifo-sketch.json
+expect_error 66 "fifo.obj" -- info fifo.obj
+ln -s /dev/zero zero.obj
+expect_error 66 "zero.obj" -- check zero.obj
+printf "${square}f 1 2 3\nf 1 3 4\n" >ok.obj
+expect_error 66 "fifo-pose.obj" -- info ok.obj --pose fifo-pose.obj
+expect_error 66 "fifo-sketch.json" --absent sk -- run ok.obj -o sk --sketch fifo-sketch.json
+truncate -s 200M sparse.ply
+truncate -s 200M sparse.obj
+truncate -s 200M sparse.glb
+for sparse in sparse.ply sparse.obj sparse.glb; do
+    expect_error 65 "$sparse" -- info $sparse
+done
+
+# A sketch far off the garment (other units, another garment, 1e306) is refused at once, naming the
+# curve, the point and the distance; it used to hang the field's snapping.
+"$BIN" generate bodice -o sk-bodice.obj --faces 2000 --quiet
+printf '{"curves":[[[1e306,0,0],[0,1e306,0]]]}' >far-sketch.json
+expect_error 65 "far-sketch.json: curve 0 point 0" --absent sk1 -- field sk-bodice.obj -o sk1 --sketch far-sketch.json
+expect_error 65 "far-sketch.json: curve 0 point 0" --absent sk2 -- run sk-bodice.obj -o sk2 --sketch far-sketch.json
+printf '{"curves":[[[0,0,0],[1700000,0,0]]]}' >km-sketch.json
+expect_error 65 "km-sketch.json: curve 0" --absent sk3 -- run sk-bodice.obj -o sk3 --sketch km-sketch.json
+
 finish

@@ -16,7 +16,7 @@ expect_ok "generate bodice"
 
 # A diagonal across the front (-y), points near the surface: the field snaps them.
 cat >sketch.json <<'EOF'
-{"curves": [[[-80, -140, 200], [0, -140, 300], [80, -140, 400]]]}
+{"curves": [[[-59.2, -105.4, 188.5], [0, -101.7, 308.3], [69.3, -124.6, 410.3]]]}
 EOF
 
 run field bodice.obj --pose bodice.pose1.obj --sketch sketch.json -o result --json --quiet

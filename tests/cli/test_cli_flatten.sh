@@ -270,10 +270,25 @@ if [ ! -w locked ]; then # root writes anyway
     expect_error 73 locked --absent locked/out -- flatten tube.obj -o locked/out
 fi
 chmod 755 locked
-# report.json (renamed last) cannot replace a directory: the two files renamed before it go again.
+# A folder of someone else's files (here a directory where report.json would go) is refused before any
+# work and left as it was; an empty one is used; a file is refused.
 mkdir -p clash/report.json
-expect_error 73 clash/report.json -- flatten tube.obj -o clash
-check "a failed commit left files behind: $(ls clash)" [ "$(ls clash)" = report.json ]
+expect_error 73 clash -- flatten tube.obj -o clash
+check "a refused run changed the folder: $(ls -A clash)" [ "$(ls -A clash)" = report.json ]
+mkdir -p empty-out
+run flatten tube.obj -o empty-out --quiet
+expect_ok "flatten into an empty folder"
+check "an empty folder did not receive the set" [ -f empty-out/report.json -a -f empty-out/.panelize ]
+echo x >a-file
+expect_error 73 a-file -- flatten tube.obj -o a-file
+# A killed run's hidden folder (its process gone) is cleared by the next run into the same place;
+# the earlier set is replaced whole, with no hidden folder left beside it.
+mkdir -p .empty-out.tmp-999999 && touch .empty-out.tmp-999999/garment.obj
+run flatten tube.obj -o empty-out --outputs json --quiet
+expect_ok "flatten again with --outputs json"
+check "the earlier run's files stayed: $(ls -A empty-out | tr '\n' ' ')" [ "$(ls -A empty-out | tr '\n' ' ')" = ".panelize report.json " ]
+check "a dead run's hidden folder stayed" [ ! -e .empty-out.tmp-999999 ]
+check "a hidden folder is left beside the output" [ -z "$(ls -A | grep '^\.empty-out')" ]
 
 # ------------------------------------------------------------------ bad options (64) and bad data (65)
 expect_error 64 --backend --absent bad -- flatten tube.obj -o bad --backend magic
@@ -315,10 +330,16 @@ for i in range(n):
 open('torus.obj', 'w').write('\n'.join(v + f) + '\n')
 "
 expect_error 65 torus.obj --absent bad -- flatten torus.obj -o bad
-# An existing directory keeps its other files when a run fails.
-mkdir -p keep && echo x >keep/other.txt
+# A folder of other files is refused at once (exit 73, before the inputs are read) and kept; an earlier
+# panelize set stays whole when a later run into it fails.
+mkdir -p foreign && echo x >foreign/other.txt
+expect_error 73 foreign -- flatten tube.obj -o foreign --panels empty.txt
+check "a refused run changed a folder of other files" [ "$(ls -A foreign)" = other.txt ]
+run flatten tube.obj -o keep --quiet
+expect_ok "flatten into keep"
+ls -A keep >keep.before
+cksum keep/report.json >keep.sum
 expect_error 65 empty.txt -- flatten tube.obj -o keep --panels empty.txt
-check "a failed run removed a file it did not write" [ -f keep/other.txt ]
-check "a failed run wrote into an existing directory" [ "$(ls keep)" = other.txt ]
+check "a failed run changed the earlier set" bash -c "ls -A keep | cmp -s - keep.before && cksum keep/report.json | cmp -s - keep.sum"
 
 finish

@@ -60,6 +60,17 @@ expect_ok "run bodice --truing off"
 report_checks "run bodice symmetry, untrued" bodice-untrued \
     "pattern pieces not mirror images (RMS over 0.5 mm or a point over 3 mm; measured 0.06 / 0.28 mm)" \
     "0 <= d['segmentation']['symmetry']['pattern_residual_mm'] < 0.5 and d['segmentation']['symmetry']['pattern_residual_max_mm'] < 3.0"
+# Piece names and shapes in report.json: every piece named, no two alike, a mirror pair named alike but for
+# its side; each piece's width, area share and extent across the grain; each dart's intake.
+report_checks "run bodice names" bodice2 \
+    "a piece without a name or two alike: $(grep -o '"name": "[^"]*' bodice2/report.json | tr '\n' ' ')" \
+    "len(set(p['name'] for p in d['panels'])) == len(d['panels']) and all(p['name'] for p in d['panels'])" \
+    "mirror partners not named X_left / X_right" \
+    "all(p['mirror_panel'] == p['id'] or sorted([p['name'], d['panels'][p['mirror_panel']]['name']]) == sorted([p['name'].replace('_right', '_left'), p['name'].replace('_left', '_right')]) for p in d['panels'])" \
+    "no piece-shape figures" \
+    "all(p['width_mm'] > 0 and 0 < p['area_share'] <= 1 and p['across_grain_mm'] > 0 for p in d['panels'])" \
+    "a dart without its intake" "all(x['intake_mm'] >= 0 for x in d['darts'])" \
+    "no count of merged slivers" "d['segmentation']['merged_slivers'] >= 0"
 check "layout.obj has polylines" grep -q '^l ' bodice2/layout.obj
 
 # Same input, same output, whatever the thread count: every file, byte for
@@ -365,8 +376,29 @@ printf 'v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n' >nan.obj
 expect_error 65 "nan.obj" --absent bad7 -- run nan.obj -o bad7 --prepare off
 printf '{"curves": [[[0,0,0]]]}' >short-sketch.json
 expect_error 65 "short-sketch.json" --absent bad8 -- run bodice.obj -o bad8 --sketch short-sketch.json
+expect_error 64 "--seam-allowance" --absent bad11 -- run bodice.obj -o bad11 --seam-allowance 1e300
+expect_error 64 "--hem-allowance" --absent bad12 -- run bodice.obj -o bad12 --hem-allowance 101
 expect_error 64 "--outputs" --absent bad9 -- run bodice.obj -o bad9 --outputs svg,pdfx
 expect_error 64 "--max-seam-mismatch" --absent bad10 -- run bodice.obj -o bad10 --max-seam-mismatch -0.1
+expect_error 64 "--min-piece-width" --absent bad11 -- run bodice.obj -o bad11 --min-piece-width -1
+expect_error 64 "--min-piece-area" --absent bad12 -- run bodice.obj -o bad12 --min-piece-area 0.6
+expect_error 64 "--min-dart-intake" --absent bad13 -- run bodice.obj -o bad13 --min-dart-intake 6mm
+expect_error 64 "--strict" --absent bad14 -- run bodice.obj -o bad14 --strict=yes
+
+# --strict: a pattern that misses its goals exits 3 (docs/cli.md) once its files are written, with one line
+# naming why; one that meets them exits 0. Without --strict the same run exits 0.
+run run bodice.obj -o strict-miss --max-seam-mismatch 1e-9 --strict --quiet
+check "run --strict, goals not met: exit $rc, expected 3" [ "$rc" -eq 3 ]
+check "run --strict, goals not met: stderr is not one line 'panelize: run: goals not met (--strict): ...': \
+$(head -c 300 "$WORK/err")" grep -q '^panelize: run: goals not met (--strict): [0-9]* of [0-9]* panels miss' "$WORK/err"
+check "run --strict, goals not met: stderr has more than one line" one_line "$WORK/err"
+[ -s strict-miss/report.json ] && report_checks "run --strict, goals not met" strict-miss \
+    "goals_met is not false" "d['summary']['goals_met'] is False"
+check "run --strict, goals not met: no report.json" [ -s strict-miss/report.json ]
+run run bodice.obj -o strict-met --strict --quiet
+expect_ok "run --strict, goals met"
+run run bodice.obj -o lenient-miss --max-seam-mismatch 1e-9 --quiet
+expect_ok "run without --strict, goals not met"
 
 # --outputs: exactly the files asked for.
 run run bodice.obj -o some --outputs dxf,layout,json --quiet
@@ -396,5 +428,44 @@ check "run interrupted: the last line is not 'cancelled': $(tail -n 1 "$WORK/err
     grep -q 'cancelled' <(tail -n 1 "$WORK/err")
 check "run interrupted: wrote files" [ ! -e interrupted ]
 check "run interrupted: left a temporary file" no_temporaries
+
+# A mesh the automatic preparation repairs (one face turned the wrong way: the counts stay) is flattened,
+# not refused as the repair had never happened.
+python3 - <<'PY'
+lines = open('bodice.obj').read().split('\n')
+faces = [i for i, line in enumerate(lines) if line.startswith('f ')]
+p = lines[faces[10]].split()
+lines[faces[10]] = ' '.join([p[0], p[1], p[3], p[2]])
+open('flipped.obj', 'w').write('\n'.join(lines))
+PY
+run run flipped.obj -o flipped-out --quiet
+check "run of a mesh with one flipped face: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]
+
+# Poses that cannot be the same garment are refused (exit 65, naming the pose), not repaired: a
+# non-finite coordinate, or a pose in other units (ten times the rest pose's size).
+python3 - <<'PY'
+rest = [l for l in open('bodice.obj').read().split('\n')]
+def write(name, change):
+    out = []
+    seen = 0
+    for line in rest:
+        if line.startswith('v '):
+            x, y, z = map(float, line.split()[1:4])
+            out.append(change(seen, x, y, z))
+            seen += 1
+        else:
+            out.append(line)
+    open(name, 'w').write('\n'.join(out))
+write('pose-nan.obj', lambda i, x, y, z: 'v %r %r %r' % (float('nan') if i == 5 else x, y, z))
+write('pose-cm.obj', lambda i, x, y, z: 'v %r %r %r' % (10 * x, 10 * y, 10 * z))
+PY
+expect_error 65 "pose 1: vertex 5" --absent posebad1 -- run bodice.obj --pose pose-nan.obj -o posebad1
+expect_error 65 "pose 1 is" --absent posebad2 -- run bodice.obj --pose pose-cm.obj -o posebad2
+
+# A valid mesh too coarse for the automatic preparation's density (a two-triangle strip) is kept as it
+# is and flattened: no usage error the user did not make.
+printf 'v 0 0 0\nv 1000 0 0\nv 1000 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n' >strip.obj
+run run strip.obj -o strip-out --quiet
+check "run of a two-triangle strip: exit $rc ($(head -c 300 "$WORK/err"))" [ "$rc" -eq 0 ]
 
 finish

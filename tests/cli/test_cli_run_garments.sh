@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # tests/cli/test_cli_run_garments.sh -- `panelize run` on every garment in
 # ../shared/data/garments (skipped when the folder is missing): every panel a
-# disk with at most 8 corners, every triangle's strain within +-5%, no flip
-# or boundary self-intersection, seams' sides within 0.5%; and `--panels uv`
+# disk with at most 8 corners, every triangle's strain within +-5% (unless the
+# layout merged slivers, and then only S is missed, and reported), no flip or
+# boundary self-intersection, seams' sides within 0.5%, no sliver (a piece
+# under 40 mm or 1 % of the area), every dart taking in 6 mm, every piece
+# named once; and `--panels uv`
 # on the DiffAvatar T-shirt goes through the whole run with its 4 true panels,
 # each close to its true shape (tests/cli/true_pieces.py prints them). With
 # --max-pieces at their true piece count, the three garments whose vt is their
@@ -39,12 +42,21 @@ print('%-28s faces %6d panels %3d darts %2d worst strain %.4f worst seam mismatc
     sys.argv[2], d['input']['faces'], s['panel_count'], len(d['darts']), s['max_abs_strain'],
     s['max_seam_mismatch_rel'], float(sys.argv[3]), s['goals_met']))
 PY
+    # Every goal is met, but where the layout merged slivers into their neighbours: there only S may be
+    # missed, and said (a sliver is never the answer to S: docs/segment.md, "Piece shapes").
+    only_strain="all(re.fullmatch(r'strain [0-9.e-]+ > 0.05', p.get('goals', '')) for p in d['panels'] if not p['goals_met'])"
     report_checks "run $name" "$out" \
-        "goals not met: $(grep -o '"goals_reasons": "[^"]*' "$out/report.json" | head -c 300)" "d['summary']['goals_met'] is True" \
+        "goals not met: $(grep -o '"goals_reasons": "[^"]*' "$out/report.json" | head -c 300)" \
+        "d['summary']['goals_met'] is True or (d['segmentation']['merged_slivers'] > 0 and $only_strain)" \
         "not injective" "d['summary']['injective'] is True" \
         "a panel has more than 8 corners" "all(p['corners'] <= 8 for p in d['panels'])" \
-        "a triangle's strain exceeds 0.05" "d['summary']['max_abs_strain'] <= 0.05 + 1e-9" \
-        "a seam's sides differ by more than 0.5%" "d['summary']['max_seam_mismatch_rel'] <= 0.005"
+        "a triangle's strain exceeds 0.05" \
+        "d['summary']['max_abs_strain'] <= 0.05 + 1e-9 or (d['segmentation']['merged_slivers'] > 0 and $only_strain)" \
+        "a seam's sides differ by more than 0.5%" "d['summary']['max_seam_mismatch_rel'] <= 0.005" \
+        "a sliver: a piece under 40 mm or 1 % of the area not forced by the garment" \
+        "all(p['shape_forced_by_input'] or (p['width_mm'] >= 40 and p['area_share'] >= 0.01) for p in d['panels'])" \
+        "a dart taking in under 6 mm" "all(x['intake_mm'] >= 6 for x in d['darts'])" \
+        "pieces without names or named alike" "len(set(p['name'] for p in d['panels'])) == len(d['panels'])"
 done
 
 # ------------------------------------------------------------------ the true piece budget

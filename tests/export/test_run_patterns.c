@@ -8,8 +8,9 @@
  * 5 mm gap) must succeed; then
  *  - the pieces: DIR/garment.obj read back (panels from its `g panel_K`
  *    groups, seams and darts found again, uv = its vt), pz_pieces_build with
- *    the same options and the run's mirror map (report.json's
- *    panels[].mirror_panel, so the "Cut 2 mirrored" pairs are the run's): on
+ *    the same options, the run's mirror map and names (report.json's
+ *    panels[].mirror_panel and name, so the "Cut 2 mirrored" pairs and the
+ *    DXF's block names are the run's): on
  *    every piece the cut line lies at the allowance outside the sew line
  *    (within 0.1 mm) and never crosses itself, every notch pair sits at equal
  *    arc length within 0.5 mm (measured from the notches' positions; end
@@ -70,10 +71,11 @@ static void check_files(const readers *r, const char *dir, const pz_pieces *piec
         reader_passes(command, log, what);
     }
     if (r->poppler) {
-        /* The sheet whole at 2 dpi (it can be metres wide: over 5 m it is cut into several 1:1 pages, docs/export.md,
-         * as the wetsuit's 24 pieces can be), the tiled PDF's cover and first tiles at 20. */
+        /* The sheet whole at 2 dpi (it can be metres wide: past 5000 mm it is cut into several 1:1 pages,
+         * each within the PDF's 14400 pt page limit, export/pdf.c), the tiled PDF's cover and first tiles at 20. */
         snprintf(command, sizeof command,
-                 "pdfinfo '%s/pattern.pdf' | grep -q '^Pages: *[1-9]' && pdftoppm -r 2 '%s/pattern.pdf' '%s/sheet' && "
+                 "pdfinfo '%s/pattern.pdf' | awk '/^Pages:/ {p = $2} /^Page size:/ {w = $3; h = $5} "
+                 "END {exit !(p >= 1 && w <= 14400 && h <= 14400)}' && pdftoppm -r 2 '%s/pattern.pdf' '%s/sheet' && "
                  "pdfinfo '%s/pattern-tiled.pdf' | grep -q '^Pages: *[0-9]' && "
                  "pdftoppm -r 20 -f 1 -l 3 '%s/pattern-tiled.pdf' '%s/tile'",
                  dir, dir, dir, dir, dir, dir);
@@ -90,8 +92,9 @@ static void check_files(const readers *r, const char *dir, const pz_pieces *piec
 }
 
 /* The run's mirror map: report.json's panels[p].mirror_panel (panel_count values, -1 where none), or NULL when the
- * run found no symmetry. */
-static int32_t *report_panel_mirror(const char *dir, int32_t panel_count, const char *what)
+ * run found no symmetry; and the pieces' names (panels[p].name: the DXF's blocks are named after them), into
+ * names (panel_count strings, freed with free_names). */
+static int32_t *report_panel_mirror(const char *dir, int32_t panel_count, const char *what, char ***names)
 {
     char path[700];
     snprintf(path, sizeof path, "%s/report.json", dir);
@@ -111,11 +114,15 @@ static int32_t *report_panel_mirror(const char *dir, int32_t panel_count, const 
     REQUIRE(cJSON_GetArraySize(panels) == panel_count, "%s: report.json has %d panels, garment.obj %d", what,
             cJSON_GetArraySize(panels), (int)panel_count);
     int32_t *mirror = malloc(((size_t)panel_count + 1) * sizeof(int32_t)), found = 0;
-    REQUIRE(mirror, "out of memory");
+    *names = calloc((size_t)panel_count + 1, sizeof(char *));
+    REQUIRE(mirror && *names, "out of memory");
     for (int32_t p = 0; p < panel_count; ++p) {
         cJSON *value = cJSON_GetObjectItem(cJSON_GetArrayItem(panels, p), "mirror_panel");
         mirror[p] = cJSON_IsNumber(value) ? value->valueint : -1;
         found += mirror[p] >= 0;
+        cJSON *name = cJSON_GetObjectItem(cJSON_GetArrayItem(panels, p), "name");
+        REQUIRE(cJSON_IsString(name) && ((*names)[p] = strdup(name->valuestring)), "%s: panel %d has no name", what,
+                (int)p);
     }
     cJSON_Delete(root);
     if (found == 0) {
@@ -144,8 +151,10 @@ static void check_garment(const readers *r, const char *data, const char *file)
     pz_export_options options;
     pz_export_options_default(&options);
     pz_pieces *pieces = NULL;
-    int32_t *panel_mirror = report_panel_mirror(dir, f.pattern->panel_count, file);
-    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, panel_mirror, NULL, &pieces, &ctx), ctx);
+    char **names = NULL;
+    int32_t *panel_mirror = report_panel_mirror(dir, f.pattern->panel_count, file, &names);
+    REQUIRE_OK(pz_pieces_build(f.pattern, f.uv, &options, panel_mirror, (const char *const *)names, &pieces, &ctx),
+               ctx);
     check_piece_cuts(f.pattern, pieces, file);
     notch_pair_stats pairs = check_notch_pairs(f.pattern, pieces, f.uv, options.notch_spacing_mm, file);
     int32_t hidden_seams = check_drawn_labels(f.pattern, pieces, file);
@@ -171,6 +180,9 @@ static void check_garment(const readers *r, const char *data, const char *file)
     pz_marker_free(&marker);
     pz_pieces_free(&pieces);
     free(panel_mirror);
+    for (int32_t p = 0; p < f.pattern->panel_count; ++p)
+        free(names[p]);
+    free(names);
     fixture_free(&f);
 }
 

@@ -3,13 +3,18 @@
  * program, a binding or a server would:
  *  - the verdict in memory is what the goals say, judged again here from the
  *    metrics (strain within S on every panel and pose, at most C corners,
- *    every seam's and dart's sides within the mismatch goal, injective), and
- *    it is what `panelize run` reports for the same garment and goals;
+ *    every seam's and dart's sides within the mismatch goal, injective) and
+ *    the pattern (each piece's width by brute force, its extent across the
+ *    grain, its darts' intake), and it is what `panelize run` reports for
+ *    the same garment and goals;
  *  - a stricter S never gives fewer panels; an impossible S is reported as
  *    not met, with the failing panels named;
  *  - pz_result_write writes exactly the files asked for, and nothing when it
  *    fails (the folder is a file);
  *  - pz_flatten with per-face panels gives those panels;
+ *  - pieces are named after their place (front_left, back_right, ... on the
+ *    bodice in given quarters; on its automatic layouts every name on its
+ *    side of the body, mirror partners alike but for the side);
  *  - progress is reported in order, and cancellation stops a run
  *    (PZ_ERR_CANCELLED, no result, nothing leaked under ASan);
  *  - bad calls are refused with a message.
@@ -28,6 +33,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 static pz_mesh *bodice(int32_t faces, int32_t poses)
 {
@@ -38,11 +44,78 @@ static pz_mesh *bodice(int32_t faces, int32_t poses)
     return mesh;
 }
 
-/* Every goal judged again from the metrics, independently of pz_goal_judge. */
+/* The piece's width measured here by brute force: twice the largest distance of a vertex or face centroid of
+ * panel p (pattern points) to its nearest outline vertex (O(V x B): a test's budget, not the library's). */
+static double brute_width(const pz_pattern *pattern, const double *uv, const uint8_t *boundary, int32_t p)
+{
+    const pz_mesh *cut = pattern->mesh;
+    uint8_t *in_panel = calloc((size_t)cut->vertex_count + 1, 1);
+    REQUIRE(in_panel, "out of memory");
+    for (int32_t f = 0; f < cut->face_count; ++f)
+        for (int k = 0; k < 3 && pattern->face_panel[f] == p; ++k)
+            in_panel[cut->faces[3 * f + k]] = 1;
+    double farthest = 0;
+    for (int32_t f = 0; f < cut->face_count; ++f) {
+        if (pattern->face_panel[f] != p)
+            continue;
+        double samples[4][2] = {{0, 0}};
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 2; ++d) {
+                samples[k][d] = uv[2 * cut->faces[3 * f + k] + d];
+                samples[3][d] += samples[k][d] / 3;
+            }
+        for (int k = 0; k < 4; ++k) {
+            double nearest = INFINITY;
+            for (int32_t v = 0; v < cut->vertex_count; ++v)
+                if (in_panel[v] && boundary[v])
+                    nearest = fmin(nearest, hypot(samples[k][0] - uv[2 * v], samples[k][1] - uv[2 * v + 1]));
+            farthest = fmax(farthest, nearest);
+        }
+    }
+    free(in_panel);
+    return 2 * farthest;
+}
+
+/* The piece-shape figures of panel p judged again: its width (brute force, within the library's propagation
+ * error above it), its extent across the grain (u), its darts' smallest intake; 1 when they meet the goals. */
+static int shape_met(const pz_result *result, const uint8_t *boundary, int32_t p, const char *what)
+{
+    const pz_goal_options *goals = &result->options.goals;
+    const pz_pattern *pattern = result->pattern;
+    const pz_goal_result *judged = &result->verdict.panels[p];
+    double width = brute_width(pattern, result->uv, boundary, p), lo = INFINITY, hi = -INFINITY, intake = -1;
+    CHECK(judged->min_width_mm >= width - 1e-9 && judged->min_width_mm <= 1.05 * width + 0.5,
+          "%s: panel %d is %.2f mm wide, %.2f mm by brute force", what, (int)p, judged->min_width_mm, width);
+    for (int32_t f = 0; f < pattern->mesh->face_count; ++f)
+        for (int k = 0; k < 3 && pattern->face_panel[f] == p; ++k) {
+            double u = result->uv[2 * pattern->mesh->faces[3 * f + k]];
+            lo = fmin(lo, u), hi = fmax(hi, u);
+        }
+    CHECK(fabs(judged->across_grain_mm - (hi - lo)) < 1e-9, "%s: panel %d: %.3f mm across the grain, u spans %.3f",
+          what, (int)p, judged->across_grain_mm, hi - lo);
+    int32_t darts = 0;
+    for (int32_t d = 0; d < pattern->dart_count; ++d)
+        if (pattern->darts[d].panel == p) {
+            double mouth = result->metrics[0]->darts[d].intake_mm;
+            intake = darts++ == 0 ? mouth : fmin(intake, mouth);
+        }
+    CHECK(judged->darts == darts && (darts == 0 || judged->min_dart_intake_mm == intake),
+          "%s: panel %d: %d darts taking in %g mm judged, %d taking in %g here", what, (int)p, (int)judged->darts,
+          judged->min_dart_intake_mm, (int)darts, intake);
+    CHECK(goals->max_piece_width_mm > 0, "%s: no fabric width goal in a run", what);
+    return (judged->min_width_mm >= goals->min_piece_width_mm || judged->width_forced) &&
+           (judged->area_share >= goals->min_piece_area || judged->area_forced) &&
+           hi - lo <= goals->max_piece_width_mm && (darts == 0 || intake >= goals->min_dart_intake_mm);
+}
+
+/* Every goal judged again from the metrics and the pattern, independently of pz_goal_judge. */
 static void check_verdict(const pz_result *result, const char *what)
 {
     const pz_goal_options *goals = &result->options.goals;
     const pz_pattern *pattern = result->pattern;
+    pz_ctx ctx = {0};
+    pz_topology *cut = NULL;
+    REQUIRE_OK(pz_topology_build(pattern->mesh, &cut, &ctx), ctx);
     int met = 1;
     double worst = 0;
     for (int32_t p = 0; p < pattern->panel_count; ++p) {
@@ -58,7 +131,7 @@ static void check_verdict(const pz_result *result, const char *what)
         CHECK(fabs(judged->max_abs_strain - strain) < 1e-12, "%s: panel %d strain %g, metrics say %g", what, (int)p,
               judged->max_abs_strain, strain);
         int panel_met = strain <= goals->max_strain && injective && judged->corners <= goals->max_corners &&
-                        judged->disk;
+                        judged->disk && shape_met(result, cut->vertex_on_boundary, p, what);
         for (int32_t s = 0; s < result->metrics[0]->seam_count; ++s) {
             const pz_seam_metrics *seam = &result->metrics[0]->seams[s];
             if (seam->panel_a == p || seam->panel_b == p)
@@ -71,6 +144,7 @@ static void check_verdict(const pz_result *result, const char *what)
               judged->failures, panel_met ? "met" : "not met");
         met &= panel_met;
     }
+    pz_topology_free(&cut);
     CHECK(result->verdict.judged && result->verdict.goals_met == met, "%s: goals_met %d, the panels say %d", what,
           result->verdict.goals_met, met);
     CHECK(fabs(result->verdict.worst_strain - worst) < 1e-12, "%s: worst strain %g vs %g", what,
@@ -215,6 +289,16 @@ static void test_write_outputs(void)
         CHECK(!file_exists(folder, others[i]), "%s written though not asked for", others[i]);
     CHECK(report && strstr(report, "\"goals_met\""), "report text not returned");
     free(report);
+    CHECK(file_exists(folder, ".panelize"), "no marker: the folder cannot be told from someone else's");
+    /* Written again with other files: the set is replaced whole (no stale pattern.svg), nothing left beside. */
+    REQUIRE_OK(pz_outputs_parse("dxf", &outputs, &ctx), ctx);
+    REQUIRE_OK(pz_result_write(result, folder, outputs, NULL, &ctx), ctx);
+    CHECK(file_exists(folder, "pattern.dxf") && !file_exists(folder, "pattern.svg") &&
+              !file_exists(folder, "report.json"),
+          "the earlier set's files stayed beside the new one");
+    char hidden[600];
+    snprintf(hidden, sizeof hidden, "%s/.some.tmp-%ld", test_temp_dir, (long)getpid());
+    CHECK(!file_exists(hidden, "."), "the hidden folder stayed: %s", hidden);
 
     /* Everything: every file of a run. */
     test_temp_path(folder, sizeof folder, "all");
@@ -313,6 +397,123 @@ static void record_progress(void *user, const char *stage, double fraction, cons
         log->flag = 1;
 }
 
+/* Each panel's area centroid on the garment (centroids: 3 per panel). */
+static void panel_centroids(const pz_result *result, double *centroids)
+{
+    const pz_mesh *mesh = result->garment;
+    int32_t panels = result->pattern->panel_count;
+    double *area = calloc((size_t)panels, sizeof(double));
+    REQUIRE(area, "out of memory");
+    memset(centroids, 0, 3 * (size_t)panels * sizeof(double));
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        const double *a = mesh->positions + 3 * mesh->faces[3 * f], *b = mesh->positions + 3 * mesh->faces[3 * f + 1],
+                     *c = mesh->positions + 3 * mesh->faces[3 * f + 2];
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double w = 0.5 * hypot(hypot(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2]), u[0] * v[1] - u[1] * v[0]);
+        int32_t p = result->pattern->face_panel[f];
+        area[p] += w;
+        for (int k = 0; k < 3; ++k)
+            centroids[3 * p + k] += w * (a[k] + b[k] + c[k]) / 3;
+    }
+    for (int32_t p = 0; p < panels; ++p)
+        for (int k = 0; k < 3; ++k)
+            centroids[3 * p + k] /= area[p];
+    free(area);
+}
+
+/*
+ * The names of the generated bodice's pieces (z up, its front towards -y, so the wearer's left is +x): every
+ * piece named, no two alike, "front" and "back" on their sides of the body, "left" and "right" on theirs,
+ * and mirror partners named alike but for the side.
+ */
+static void check_names(const pz_result *result, const char *what)
+{
+    int32_t panels = result->pattern->panel_count;
+    double *centroids = malloc(3 * (size_t)panels * sizeof(double));
+    REQUIRE(centroids && result->panel_names, "%s: no names", what);
+    panel_centroids(result, centroids);
+    for (int32_t p = 0; p < panels; ++p) {
+        const char *name = result->panel_names[p];
+        REQUIRE(name && *name, "%s: panel %d has no name", what, (int)p);
+        for (int32_t q = 0; q < p; ++q)
+            CHECK(strcmp(name, result->panel_names[q]) != 0, "%s: panels %d and %d are both %s", what, (int)q, (int)p,
+                  name);
+        double x = centroids[3 * p], y = centroids[3 * p + 1];
+        if (strncmp(name, "front", 5) == 0)
+            CHECK(y < 0, "%s: %s lies at y = %.0f, behind", what, name, y);
+        if (strncmp(name, "back", 4) == 0)
+            CHECK(y > 0, "%s: %s lies at y = %.0f, in front", what, name, y);
+        if (strstr(name, "_left"))
+            CHECK(x > 0, "%s: %s lies at x = %.0f, on the right", what, name, x);
+        if (strstr(name, "_right"))
+            CHECK(x < 0, "%s: %s lies at x = %.0f, on the left", what, name, x);
+        int32_t m = result->panel_mirror ? result->panel_mirror[p] : -1;
+        if (m >= 0 && m != p) {
+            char mirrored[64];
+            snprintf(mirrored, sizeof mirrored, "%s", name);
+            char *side = strstr(mirrored, "_left") ? strstr(mirrored, "_left") : strstr(mirrored, "_right");
+            REQUIRE(side, "%s: %s has a mirror partner but no side", what, name);
+            const char *other = strncmp(side, "_left", 5) == 0 ? "_right" : "_left";
+            char expected[80];
+            snprintf(expected, sizeof expected, "%.*s%s%s", (int)(side - mirrored), mirrored, other,
+                     side + (strncmp(side, "_left", 5) == 0 ? 5 : 6));
+            CHECK(strcmp(result->panel_names[m], expected) == 0, "%s: %s's mirror partner is %s, not %s", what, name,
+                  result->panel_names[m], expected);
+        }
+    }
+    free(centroids);
+}
+
+/* Piece names from their place: the bodice in four given quarters, and its automatic layouts. */
+static void test_piece_names(void)
+{
+    pz_ctx ctx = {0};
+    ctx.quiet = 1;
+    pz_mesh *mesh = bodice(3000, 0);
+    int32_t *face_panel = malloc((size_t)mesh->face_count * sizeof(int32_t));
+    REQUIRE(face_panel, "out of memory");
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        double x = 0, y = 0;
+        for (int k = 0; k < 3; ++k)
+            x += mesh->positions[3 * mesh->faces[3 * f + k]], y += mesh->positions[3 * mesh->faces[3 * f + k] + 1];
+        face_panel[f] = (y < 0 ? 0 : 2) + (x > 0 ? 0 : 1);
+    }
+    pz_panels panels = {.source = PZ_PANELS_FACES, .face_panel = face_panel, .panel_count = 4};
+    pz_run_options options;
+    pz_run_options_default(&options);
+    options.panels = &panels;
+    pz_result *result = NULL;
+    REQUIRE_OK(pz_run(mesh, &options, &result, &ctx), ctx);
+    static const char *const quarters[4] = {"front_left", "front_right", "back_left", "back_right"};
+    for (int32_t p = 0; p < 4; ++p)
+        CHECK(result->panel_names && strcmp(result->panel_names[p], quarters[p]) == 0, "quarter %d named %s, not %s",
+              (int)p, result->panel_names ? result->panel_names[p] : "(none)", quarters[p]);
+    check_names(result, "bodice quarters");
+    CHECK(result->pieces && strcmp(result->pieces->pieces[0].name, "front_left") == 0, "piece 0 labelled %s",
+          result->pieces ? result->pieces->pieces[0].name : "(none)");
+    pz_result_free(&result);
+    /* pz_flatten keeps the panels' numbers: names from a place are the run's. */
+    REQUIRE_OK(pz_flatten(mesh, &panels, NULL, &result, &ctx), ctx);
+    CHECK(!result->panel_names, "pz_flatten named the pieces");
+    pz_result_free(&result);
+    free(face_panel);
+    double strains[2] = {0.05, 0.03};
+    int32_t pairs = 0;
+    for (int i = 0; i < 2; ++i) {
+        pz_run_options_default(&options);
+        options.goals.max_strain = strains[i];
+        REQUIRE_OK(pz_run(mesh, &options, &result, &ctx), ctx);
+        char what[64];
+        snprintf(what, sizeof what, "bodice S %g", strains[i]);
+        check_names(result, what);
+        for (int32_t p = 0; result->panel_mirror && p < result->pattern->panel_count; ++p)
+            pairs += result->panel_mirror[p] > p;
+        pz_result_free(&result);
+    }
+    CHECK(pairs > 0, "no mirror pair in the bodice's layouts: the partners' names went unchecked");
+    pz_mesh_free(&mesh);
+}
+
 static void test_progress_and_cancel(void)
 {
     pz_mesh *mesh = bodice(3000, 0);
@@ -386,6 +587,7 @@ int main(void)
     test_impossible_goal();
     test_write_outputs();
     test_flatten_given_panels();
+    test_piece_names();
     test_progress_and_cancel();
     test_bad_calls();
     CHECK(test_temp_dir_remove() == 0, "cannot remove %s", test_temp_dir);

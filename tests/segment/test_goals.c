@@ -13,7 +13,10 @@
  *  - a dart (a slit from the outline to a tip inside) adds no corner, with
  *    its mouth on the border or at a seam; on a dome it flattens as one dart
  *    that opens by more than 2 degrees;
- *  - pz_goal_describe names each failure.
+ *  - pz_goal_describe names each failure;
+ *  - piece shapes: pz_piece_width of flat rectangles; a band along the hem is
+ *    narrow and small, a strap between two borders is narrow by the input
+ *    (not judged), a whole component is neither.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -256,6 +259,121 @@ static void test_dart_corners(void)
     pz_mesh_free(&mesh);
 }
 
+/* pz_piece_width on flat rectangles of unit squares (2D points): twice the largest inscribed distance. */
+static double rectangle_width(int columns, int rows, double size)
+{
+    pz_mesh *mesh = test_grid(columns, rows, TEST_GRID_FLAT, 0, &ctx);
+    pz_topology *topology = test_topology(mesh, &ctx);
+    double *points = malloc((size_t)mesh->vertex_count * 2 * sizeof(double));
+    REQUIRE(points, "out of memory");
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        for (int k = 0; k < 2; ++k)
+            points[2 * v + k] = size * mesh->positions[3 * v + k];
+    double width = -1;
+    REQUIRE_OK(pz_piece_width(mesh->vertex_count, points, 2, mesh->face_count, mesh->faces,
+                              topology->vertex_on_boundary, &width, &ctx), ctx);
+    free(points);
+    pz_topology_free(&topology);
+    pz_mesh_free(&mesh);
+    return width;
+}
+
+/* Flat grid of 10 mm squares, `columns` x `rows`; label[f] from `band`: the panel of each face. */
+typedef int (*band_label)(int column, int row);
+
+static int hem_band(int column, int row)
+{
+    (void)column;
+    return row < 2;  /* a band 20 mm wide along the bottom border */
+}
+
+static int strap(int column, int row)
+{
+    (void)row;
+    return column >= 5 && column < 25;  /* the whole height of a 20 mm grid: border on both long sides */
+}
+
+static pz_goal_result shape_of(int columns, int rows, band_label band, const pz_goal_options *options)
+{
+    pz_mesh *mesh = test_grid(columns, rows, TEST_GRID_FLAT, 0, &ctx);
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        for (int k = 0; k < 2; ++k)
+            mesh->positions[3 * v + k] *= 10;
+    pz_topology *topology = test_topology(mesh, &ctx);
+    int32_t *label = malloc((size_t)mesh->face_count * sizeof(int32_t));
+    int32_t *ids = malloc((size_t)mesh->face_count * sizeof(int32_t));
+    uint8_t *cut = calloc((size_t)topology->edge_count, 1);
+    REQUIRE(label && ids && cut, "out of memory");
+    int32_t count = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        label[f] = band((f / 2) % columns, (f / 2) / columns);
+        if (label[f])
+            ids[count++] = f;
+    }
+    for (int32_t e = 0; e < topology->edge_count; ++e) {
+        int32_t h = topology->edge_halfedge[2 * e], t = topology->edge_halfedge[2 * e + 1];
+        cut[e] = t >= 0 && label[pz_he_face(h)] != label[pz_he_face(t)];
+    }
+    pz_goal_result result;
+    REQUIRE_OK(pz_segment_goals(mesh, topology, cut, ids, count, options, &result, &ctx), ctx);
+    free(label);
+    free(ids);
+    free(cut);
+    pz_topology_free(&topology);
+    pz_mesh_free(&mesh);
+    return result;
+}
+
+/*
+ * Piece shapes (docs/segment.md, "Piece shapes"): the width of flat rectangles; a band cut off along the
+ * hem is narrow (its seam makes it so) and small; a strap the garment itself makes narrow (border on both
+ * long sides, seams at its ends) is not judged narrow; a whole component is neither narrow nor small.
+ */
+static void test_piece_shapes(void)
+{
+    double wide = rectangle_width(20, 20, 5), strip = rectangle_width(40, 6, 5), thin = rectangle_width(40, 1, 5);
+    CHECK(fabs(wide - 100) < 3, "a 100 mm square is %.2f mm wide", wide);
+    CHECK(fabs(strip - 30) < 2, "a 200 x 30 mm strip is %.2f mm wide", strip);
+    CHECK(thin > 2 && thin < 6, "a strip one square (5 mm) wide is %.2f mm wide", thin);
+
+    pz_goal_options options = goal_options(0.05, 8);
+    pz_goal_options_default(&options);
+    options.textile_iterations = -1;  /* the shape alone */
+    pz_goal_result band = shape_of(30, 20, hem_band, &options);
+    CHECK(band.min_width_mm > 18 && band.min_width_mm < 22 && !band.width_forced, "hem band: %.1f mm wide, forced %d",
+          band.min_width_mm, band.width_forced);
+    CHECK(fabs(band.area_share - 0.1) < 1e-9 && !band.area_forced, "hem band: area share %g", band.area_share);
+    CHECK(band.failures == PZ_GOAL_NARROW, "hem band: failures %u", band.failures);
+    options.min_piece_area = 0.2;
+    band = shape_of(30, 20, hem_band, &options);
+    CHECK(band.failures == (PZ_GOAL_NARROW | PZ_GOAL_SMALL), "hem band, 20 %% minimum area: failures %u",
+          band.failures);
+    char text[256];
+    pz_goal_describe(&band, &options, text, sizeof text);
+    CHECK(strstr(text, "mm wide < 40 mm") && strstr(text, "of the area < 20%"), "describe: '%s'", text);
+    options.min_piece_area = 0.01;
+    options.min_piece_width_mm = 15;
+    band = shape_of(30, 20, hem_band, &options);
+    CHECK(band.failures == 0, "hem band, 15 mm minimum: failures %u", band.failures);
+
+    pz_goal_options_default(&options);
+    options.textile_iterations = -1;
+    pz_goal_result held = shape_of(30, 2, strap, &options);
+    CHECK(held.min_width_mm < 25 && held.width_forced && held.failures == 0,
+          "strap: %.1f mm wide, forced %d, failures %u", held.min_width_mm, held.width_forced, held.failures);
+    options.min_piece_width_mm = 120;  /* farther from its end seams than 100 mm nowhere: narrow by them */
+    held = shape_of(30, 2, strap, &options);
+    CHECK(!held.width_forced && (held.failures & PZ_GOAL_NARROW), "strap, 120 mm minimum: forced %d, failures %u",
+          held.width_forced, held.failures);
+    pz_goal_options_default(&options);
+    options.textile_iterations = -1;
+    options.min_piece_area = 0.5;
+    pz_goal_result whole = shape_of(30, 2, hem_band, &options);  /* every face: one component */
+    CHECK(whole.width_forced && whole.area_forced && fabs(whole.area_share - 1) < 1e-9 && whole.failures == 0,
+          "whole component: forced %d %d, share %g, failures %u", whole.width_forced, whole.area_forced,
+          whole.area_share, whole.failures);
+}
+
 int main(void)
 {
     pz_ctx_init(&ctx);
@@ -265,5 +383,6 @@ int main(void)
     test_hemisphere();
     test_saw_tooth();
     test_dart_corners();
+    test_piece_shapes();
     return test_finish();
 }
