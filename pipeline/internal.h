@@ -13,6 +13,7 @@
  *                  pattern's mirror symmetry
  *   mirror.c       exact mirror pieces: pairs and pieces crossed by the plane
  *   mirror_pairing.c  their outlines paired (mirror_internal.h), the residual
+ *   tradeoff.c     the outlook on S before the segmentation, the trade-off curve after the verdict
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
  *   names.c        the pieces' names from their place on the garment
  *   report.c       report.json (pz_result_report)
@@ -193,6 +194,23 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
  * same name with the other side. Nothing to do when the panels have names (the user's groups or files).
  */
 pz_status pl_name_pieces(pz_result *result, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- tradeoff.c */
+
+/**
+ * The outlook on S (docs/run.md, "Can S be met?"), taken on the prepared garment before the field and the
+ * segmentation: the poses' spread and the strain of sample pieces of the smallest sound size; one note
+ * naming an S that would work when they exceed S. PZ_ERR_NOMEM, PZ_ERR_CANCELLED.
+ */
+pz_status pl_strain_outlook(const pz_mesh *garment, const pz_run_options *options, const double grain[3],
+                            pz_strain_outlook *out, pz_ctx *ctx);
+
+/**
+ * The trade-off (docs/run.md): result->tradeoff from the final layout (result->segment on result->garment),
+ * merged down until the worst strain passes the grid's loosest goal. Left unmeasured (count 0) when it
+ * cannot be made; PZ_ERR_NOMEM, PZ_ERR_CANCELLED.
+ */
+pz_status pl_measure_tradeoff(pz_result *result, pz_ctx *ctx);
 
 /** The flattened pieces' own mirror symmetry (result->pattern_mirror_*), when the layout found a plane. */
 void pl_measure_pattern_symmetry(pz_result *result, pz_ctx *ctx);
