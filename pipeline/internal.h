@@ -8,6 +8,7 @@
  *                  their seams and darts mapped onto the prepared garment
  *   segmentation.c the automatic layout with its verdict rounds and the
  *                  looser goal settings that keep panel counts monotone
+ *   sketches.c     the designer's lines gathered for it (pl_gather_sketch)
  *   flatten.c      the chosen back-end, the pieces laid out, metrics
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
@@ -104,6 +105,14 @@ pz_status pl_user_correspondences(const pz_panels *panels, const pl_garment *gar
                                   pz_correspondences *out, pz_ctx *ctx);
 
 /* ---------------------------------------------------------------- segmentation.c */
+
+/**
+ * The user's sketches (options->sketch in memory, then options->sketch_path) plus the seams `prepared` welded
+ * (a designer's seams survive the weld), in one sketch in the garment's millimetres; *out NULL when there is
+ * none, else the caller frees it (pz_sketch_free). A sketch off the surface is a data error naming it.
+ */
+pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_result *prepared, const pz_mesh *mesh,
+                           pz_sketch **out, pz_ctx *ctx);
 
 /** The automatic layout's state across verdict rounds (opaque). */
 typedef struct pl_segmenter pl_segmenter;
