@@ -75,6 +75,7 @@
 #define PZ_CLI_OPT_MIN_DART_INTAKE (UINT64_C(1) << 44) /* --min-dart-intake MM (run) */
 #define PZ_CLI_OPT_STRICT (UINT64_C(1) << 45) /* --strict (run; a flag: stored as the value "1") */
 #define PZ_CLI_OPT_FOLD (UINT64_C(1) << 46) /* --fold (run; a flag: stored as the value "1") */
+#define PZ_CLI_OPT_MAX_PIECES (UINT64_C(1) << 47) /* --max-pieces N (run) */
 
 /* A command's outcome besides the pz_status codes (main.c maps it to its exit code, docs/cli.md): `run
  * --strict` wrote its files but the pattern misses its goals. */
@@ -83,7 +84,7 @@
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 38
+#define PZ_CLI_VALUE_COUNT 39
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;

@@ -19,7 +19,7 @@
 #include <string.h>
 
 const char pz_cli_run_usage[] =
-    "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S]\n"
+    "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S] [--max-pieces N]\n"
     "           [--pose FILE]... [--sketch FILE] [--panels FILE|uv]\n"
     "           [--symmetry auto|off|x|y|z|PLANE] [--fold] [--darts on|off] [--truing on|off]\n"
     "           [--grain X,Y,Z]\n"
@@ -42,6 +42,9 @@ const char pz_cli_run_usage[] =
     "  --max-corners C      at most C corners per panel (default 8)\n"
     "  --max-strain S       every triangle's warp and weft strain within +-S\n"
     "                       (default 0.05: 5% in tension or compression)\n"
+    "  --max-pieces N       at most N pieces (a mirror pair counts as two), with the\n"
+    "                       least strain: the layout is made, then merged down;\n"
+    "                       corners and S then give way (default: no budget)\n"
     "  --max-seam-mismatch R  every seam's and dart's two sides within R of their\n"
     "                       length (default 0.005: 0.5%)\n"
     "  --min-piece-width MM no piece narrower (twice its largest inscribed distance;\n"
@@ -192,6 +195,14 @@ static pz_status parse_run_options(const pz_cli_args *args, pz_run_options *opti
 {
     pz_status status = parse_goals(args, &options->goals, ctx);
     const char *text;
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_MAX_PIECES))) {
+        char *end = NULL;
+        errno = 0;
+        long pieces = strtol(text, &end, 10);
+        if (end == text || *end || errno == ERANGE || pieces < 1 || pieces > 100000)
+            return pz_error(ctx, PZ_ERR_USAGE, "run: --max-pieces: '%s' is not a whole number in 1..100000", text);
+        options->segment.max_pieces = (int32_t)pieces;
+    }
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SYMMETRY)))
         status = parse_symmetry(text, &options->segment, ctx);
     options->output.fold = pz_cli_value(args, PZ_CLI_OPT_FOLD) != NULL;

@@ -52,7 +52,8 @@ static const pz_cli_command command_table[] = {
          PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |
          PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |
          PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_MIN_PIECE_WIDTH |
-         PZ_CLI_OPT_MIN_PIECE_AREA | PZ_CLI_OPT_MIN_DART_INTAKE | PZ_CLI_OPT_STRICT | PZ_CLI_OPT_FOLD | PZ_CLI_OPT_EXPORT,
+         PZ_CLI_OPT_MIN_PIECE_AREA | PZ_CLI_OPT_MIN_DART_INTAKE | PZ_CLI_OPT_STRICT | PZ_CLI_OPT_FOLD |
+         PZ_CLI_OPT_MAX_PIECES | PZ_CLI_OPT_EXPORT,
      pz_cli_run},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
@@ -122,6 +123,7 @@ static const option_spec option_table[] = {
     {"min-dart-intake", 0, PZ_CLI_OPT_MIN_DART_INTAKE, 1},
     {"strict", 0, PZ_CLI_OPT_STRICT, 0},
     {"fold", 0, PZ_CLI_OPT_FOLD, 0},
+    {"max-pieces", 0, PZ_CLI_OPT_MAX_PIECES, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 

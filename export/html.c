@@ -389,6 +389,9 @@ pz_status pz_export_write_report_html(FILE *file, const pz_export_inputs *inputs
     strain_map_clear(&map);
     put_object_table(file, cJSON_GetObjectItemCaseSensitive(report, "summary"), "Summary", "summary");
     put_object_table(file, cJSON_GetObjectItemCaseSensitive(report, "marker"), "Marker", "marker");
+    put_array_table(file, cJSON_GetObjectItemCaseSensitive(report, "tradeoff"),
+                    "Trade-off: the pieces each strain goal needs", "tradeoff");
+    put_object_table(file, cJSON_GetObjectItemCaseSensitive(report, "strain_outlook"), "Can S be met?", "outlook");
     put_array_table(file, cJSON_GetObjectItemCaseSensitive(report, "panels"), "Panels", "panels");
     put_array_table(file, cJSON_GetObjectItemCaseSensitive(report, "seams"), "Seams", "seams");
     put_array_table(file, cJSON_GetObjectItemCaseSensitive(report, "darts"), "Darts", "darts");

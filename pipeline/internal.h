@@ -8,11 +8,13 @@
  *                  their seams and darts mapped onto the prepared garment
  *   segmentation.c the automatic layout with its verdict rounds and the
  *                  looser goal settings that keep panel counts monotone
+ *   sketches.c     the designer's lines gathered for it (pl_gather_sketch)
  *   flatten.c      the chosen back-end, the pieces laid out, metrics
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
  *   mirror.c       exact mirror pieces: pairs and pieces crossed by the plane
  *   mirror_pairing.c  their outlines paired (mirror_internal.h), the residual
+ *   tradeoff.c     the outlook on S before the segmentation, the trade-off curve after the verdict
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
  *   names.c        the pieces' names from their place on the garment
  *   report.c       report.json (pz_result_report)
@@ -104,6 +106,14 @@ pz_status pl_user_correspondences(const pz_panels *panels, const pl_garment *gar
 
 /* ---------------------------------------------------------------- segmentation.c */
 
+/**
+ * The user's sketches (options->sketch in memory, then options->sketch_path) plus the seams `prepared` welded
+ * (a designer's seams survive the weld), in one sketch in the garment's millimetres; *out NULL when there is
+ * none, else the caller frees it (pz_sketch_free). A sketch off the surface is a data error naming it.
+ */
+pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_result *prepared, const pz_mesh *mesh,
+                           pz_sketch **out, pz_ctx *ctx);
+
 /** The automatic layout's state across verdict rounds (opaque). */
 typedef struct pl_segmenter pl_segmenter;
 
@@ -193,6 +203,23 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
  * same name with the other side. Nothing to do when the panels have names (the user's groups or files).
  */
 pz_status pl_name_pieces(pz_result *result, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- tradeoff.c */
+
+/**
+ * The outlook on S (docs/run.md, "Can S be met?"), taken on the prepared garment before the field and the
+ * segmentation: the poses' spread and the strain of sample pieces of the smallest sound size; one note
+ * naming an S that would work when they exceed S. PZ_ERR_NOMEM, PZ_ERR_CANCELLED.
+ */
+pz_status pl_strain_outlook(const pz_mesh *garment, const pz_run_options *options, const double grain[3],
+                            pz_strain_outlook *out, pz_ctx *ctx);
+
+/**
+ * The trade-off (docs/run.md): result->tradeoff from the final layout (result->segment on result->garment),
+ * merged down until the worst strain passes the grid's loosest goal. Left unmeasured (count 0) when it
+ * cannot be made; PZ_ERR_NOMEM, PZ_ERR_CANCELLED.
+ */
+pz_status pl_measure_tradeoff(pz_result *result, pz_ctx *ctx);
 
 /** The flattened pieces' own mirror symmetry (result->pattern_mirror_*), when the layout found a plane. */
 void pl_measure_pattern_symmetry(pz_result *result, pz_ctx *ctx);

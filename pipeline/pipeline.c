@@ -338,6 +338,8 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
     }
     if (status == PZ_OK && from_run)
         status = pl_final_verdict(result, !result->segment || result->segment->goals_met, ctx);
+    if (status == PZ_OK && from_run)
+        status = pl_measure_tradeoff(result, ctx);
     if (status == PZ_OK)
         status = find_mirror_panels(result, ctx);
     if (status == PZ_OK && from_run)

@@ -192,9 +192,39 @@ typedef struct pz_verdict {
     int32_t over_strain_panels;      /* of them, over S */
     double worst_strain;             /* worst |warp| or |weft| strain over every panel and pose */
     double worst_seam_mismatch;      /* worst relative seam or dart length mismatch */
+    double area_over_strain;         /* share of the garment's area whose warp or weft strain exceeds S in some
+                                        pose (0..1) */
     pz_goal_result *panels;          /* panel_count: each panel's figures and failure bits */
     char reasons[1024];              /* when not met: a summary, then the failing panels */
 } pz_verdict;
+
+/**
+ * The outlook on the strain goal, taken before the segmentation (pz_run; docs/run.md, "Can S be met?"):
+ * estimates of the least strain any layout of sound pieces can reach.
+ */
+typedef struct pz_strain_outlook {
+    int measured;                    /* 0: not taken (given panels) */
+    double pose_spread;              /* the poses' own spread: the area-weighted 99th percentile over triangles of
+                                        the least warp/weft strain any one pattern triangle leaves in some pose
+                                        (0 without extra poses) */
+    double piece_strain;             /* the 90th percentile of the worst strain of sample pieces (geodesic disks of
+                                        piece_area_mm2, flattened as the segmentation flattens a panel) */
+    double piece_area_mm2;           /* 1 % of the garment's area, or its area over --max-pieces when larger */
+    int32_t samples;                 /* sample pieces flattened */
+    double suggested_strain;         /* an S these estimates allow (rounded up to 0.01), at least the run's S */
+    int reachable;                   /* 1: neither estimate exceeds S */
+    double ms;
+} pz_strain_outlook;
+
+/** The trade-off grid: the strain goals report.json's "tradeoff" gives the piece counts of. */
+#define PZ_TRADEOFF_GRID_COUNT 7
+extern const double pz_tradeoff_grid[PZ_TRADEOFF_GRID_COUNT];
+
+/**
+ * The pieces the strain goal s needs, from a run's trade-off sequence (result->tradeoff): the fewest panels
+ * of its steps whose worst strain is within s; -1 when none is (not measured that strictly).
+ */
+int32_t pz_tradeoff_pieces(const pz_segment_tradeoff *tradeoff, double s);
 
 /** Timings of one call, milliseconds. */
 typedef struct pz_timings {
@@ -261,6 +291,7 @@ typedef struct pz_result {
     pz_segment_result *segment;      /* the automatic layout: symmetry, panels, darts, counts */
     pz_prepare_result *prepared;     /* the automatic preparation's report (its mesh moved to `garment`) */
     pz_truing_result truing;
+    int truing_dropped;              /* 1: the trued seams missed the goals and the layout was flattened untrued */
     int32_t field_singularities;
     int32_t verdict_rounds;          /* layouts made again because the joint flattening rejected panels */
     int32_t vetoed_panels;
@@ -269,6 +300,9 @@ typedef struct pz_result {
     int looser_seeded;
     double looser_reachable_strain;  /* the strictest S among them whose layout met every goal (at the run's C); <= 0: none */
     int32_t looser_reachable_panels; /* that layout's panels */
+    pz_strain_outlook outlook;       /* can S be met: taken before the segmentation */
+    pz_segment_tradeoff tradeoff;    /* the final layout's merge sequence (count 0: not measured): the pieces each
+                                        strain goal needs (pz_tradeoff_pieces; docs/run.md, "The trade-off") */
     double pattern_mirror_rms_mm;    /* mirror symmetry of the flattened pieces; -1 when not measured */
     double pattern_mirror_max_mm;
     /* The mirror plane (docs/segment.md, "Symmetry"): found or given before the field (its figures only: the
@@ -276,6 +310,7 @@ typedef struct pz_result {
      * counts of the first layouts with and without it (-1: not made). */
     pz_symmetry symmetry;
     int symmetry_used;
+    int symmetry_rejected;           /* the joint flattening rejected the mirrored layout: made without the plane */
     int32_t pieces_with_symmetry, pieces_without_symmetry;
     int32_t mirror_pieces;           /* mirror pairs and panels crossed by the plane in the final layout */
     int32_t exact_mirror_pieces;     /* those made exact mirror images (docs/segment.md, "Exact mirror pieces") */

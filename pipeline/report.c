@@ -555,6 +555,7 @@ static int extend_symmetry(const pz_result *result, cJSON *object)
     static const char *const axes[] = {"x", "y", "z"};
     int ok = cJSON_AddBoolToObject(symmetry, "found", plane->found) != NULL;
     ok &= cJSON_AddBoolToObject(symmetry, "used", used) != NULL;
+    ok &= cJSON_AddBoolToObject(symmetry, "rejected_by_verdict", result->symmetry_rejected) != NULL;
     ok &= cJSON_AddStringToObject(symmetry, "axis", !plane->found ? "none"
                                                      : plane->axis >= 0 && plane->axis < 3 ? axes[plane->axis]
                                                                                            : "oblique") != NULL;
@@ -591,8 +592,9 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
     ok &= add_plain_number(object, "field_singularities", result->field_singularities);
     ok &= add_plain_number(object, "verdict_rounds", result->verdict_rounds);
     cJSON *truing = cJSON_AddObjectToObject(object, "truing");
-    ok &= truing != NULL && cJSON_AddBoolToObject(truing, "on", options->truing) != NULL;
-    if (truing && options->truing) {
+    ok &= truing != NULL && cJSON_AddBoolToObject(truing, "on", options->truing && !result->truing_dropped) != NULL;
+    ok &= truing != NULL && cJSON_AddBoolToObject(truing, "dropped", result->truing_dropped) != NULL;
+    if (truing && options->truing && !result->truing_dropped) {
         const pz_truing_result *t = &result->truing;
         ok &= add_plain_number(truing, "moved_vertices", t->moved_vertices);
         ok &= add_plain_number(truing, "relaxed_vertices", t->relaxed_vertices);
@@ -624,6 +626,13 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
     ok &= add_plain_number(object, "merged_slivers", segment->merged_slivers);
     ok &= add_plain_number(object, "dart_count", segment->dart_count);
     ok &= cJSON_AddBoolToObject(object, "layout_goals_met", segment->goals_met) != NULL;
+    if (segment->max_pieces > 0) {
+        cJSON *budget = cJSON_AddObjectToObject(object, "max_pieces");
+        ok &= budget && add_plain_number(budget, "pieces", segment->max_pieces);
+        ok &= budget && cJSON_AddBoolToObject(budget, "met", segment->budget_met) != NULL;
+        ok &= budget && add_plain_number(budget, "merges", segment->budget_merges);
+        ok &= budget && add_plain_number(budget, "unmirrored_merges", segment->budget_unmirrored);
+    }
     ok &= extend_symmetry(result, object);
     cJSON *timings = cJSON_AddObjectToObject(object, "timings_ms");
     ok &= timings != NULL;
@@ -633,6 +642,8 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
         ok &= add_plain_number(timings, "insert", segment->insert_ms);
         ok &= add_plain_number(timings, "remove", segment->remove_ms);
         ok &= add_plain_number(timings, "darts", segment->darts_ms);
+        ok &= add_plain_number(timings, "budget", segment->budget_ms);
+        ok &= add_plain_number(timings, "tradeoff", result->tradeoff.ms);
         ok &= add_plain_number(timings, "total", segment->total_ms);
     }
     return ok;
@@ -666,6 +677,50 @@ static int extend_prepare(const pz_result *result, cJSON *root)
     return ok;
 }
 
+/* "tradeoff": the pieces each strain goal of the grid needs (null: not measured that strictly), from the final
+ * layout's merge sequence; "tradeoff_sequence": the sequence itself. Only for a segmentation. */
+static int extend_tradeoff(const pz_result *result, cJSON *root)
+{
+    const pz_segment_tradeoff *tradeoff = &result->tradeoff;
+    if (!result->segment)
+        return 1;
+    cJSON *curve = cJSON_AddArrayToObject(root, "tradeoff");
+    cJSON *sequence = cJSON_AddArrayToObject(root, "tradeoff_sequence");
+    int ok = curve && sequence;
+    for (int i = 0; ok && tradeoff->count > 0 && i < PZ_TRADEOFF_GRID_COUNT; ++i) {
+        cJSON *point = cJSON_CreateObject();
+        ok = point && cJSON_AddItemToArray(curve, point);
+        int32_t pieces = pz_tradeoff_pieces(tradeoff, pz_tradeoff_grid[i]);
+        ok = ok && add_plain_number(point, "max_strain", pz_tradeoff_grid[i]);
+        ok = ok && (pieces > 0 ? add_plain_number(point, "pieces", pieces) : cJSON_AddNullToObject(point, "pieces") != NULL);
+    }
+    for (int32_t i = 0; ok && i < tradeoff->count; ++i) {
+        cJSON *step = cJSON_CreateObject();
+        ok = step && cJSON_AddItemToArray(sequence, step);
+        ok = ok && add_plain_number(step, "pieces", tradeoff->pieces[i]);
+        ok = ok && add_plain_number(step, "worst_strain", pz_round(tradeoff->worst_strain[i], 6));
+    }
+    return ok;
+}
+
+/* "strain_outlook": can S be met with sound pieces (docs/run.md, "Can S be met?"). */
+static int extend_outlook(const pz_result *result, cJSON *root)
+{
+    const pz_strain_outlook *outlook = &result->outlook;
+    if (!outlook->measured)
+        return 1;
+    cJSON *object = cJSON_AddObjectToObject(root, "strain_outlook");
+    int ok = object != NULL;
+    ok = ok && cJSON_AddBoolToObject(object, "reachable", outlook->reachable) != NULL;
+    ok = ok && add_plain_number(object, "suggested_max_strain", pz_round(outlook->suggested_strain, 4));
+    ok = ok && add_plain_number(object, "pose_spread", pz_round(outlook->pose_spread, 6));
+    ok = ok && add_plain_number(object, "piece_strain", pz_round(outlook->piece_strain, 6));
+    ok = ok && add_plain_number(object, "piece_area_mm2", pz_round(outlook->piece_area_mm2, 1));
+    ok = ok && add_plain_number(object, "samples", outlook->samples);
+    ok = ok && add_plain_number(object, "ms", pz_round(outlook->ms, 3));
+    return ok;
+}
+
 /* The goals, the segmentation and the preparation: what pz_run adds to pz_flatten's report. */
 static int extend_run_report(const pz_result *result, cJSON *root)
 {
@@ -674,6 +729,7 @@ static int extend_run_report(const pz_result *result, cJSON *root)
     if (ok && summary) {
         ok &= cJSON_AddBoolToObject(summary, "goals_met", result->verdict.goals_met) != NULL;
         ok &= add_plain_number(summary, "max_seam_mismatch_any_rel", pz_round(result->verdict.worst_seam_mismatch, 6));
+        ok &= add_plain_number(summary, "area_over_max_strain", pz_round(result->verdict.area_over_strain, 6));
         if (!result->verdict.goals_met)
             ok &= cJSON_AddStringToObject(summary, "goals_reasons", result->verdict.reasons) != NULL;
     }
@@ -683,7 +739,8 @@ static int extend_run_report(const pz_result *result, cJSON *root)
         ok &= add_plain_number(timings, "field", pz_round(result->timings.field, 3));
         ok &= add_plain_number(timings, "segment", pz_round(result->timings.segment, 3));
     }
-    return ok && extend_segmentation(result, root) && extend_prepare(result, root);
+    return ok && extend_segmentation(result, root) && extend_prepare(result, root) && extend_tradeoff(result, root) &&
+           extend_outlook(result, root);
 }
 
 /* ---------------------------------------------------------------- the report */

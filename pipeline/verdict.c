@@ -221,6 +221,28 @@ static void write_reasons(pz_verdict *verdict, const pz_goal_options *goals, int
     }
 }
 
+/* The share of the garment's area whose warp or weft strain exceeds s in the rest pose or another. */
+static double area_over_strain(const pz_result *result, double s)
+{
+    const pz_mesh *mesh = result->pattern->mesh;
+    double *areas = malloc((size_t)mesh->face_count * sizeof(double) + 1);
+    if (!areas)
+        return -1;
+    pz_geom_face_areas(mesh, areas);
+    double over = 0, total = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        int exceeds = 0;
+        for (int i = 0; i < result->metrics_count && !exceeds; ++i) {
+            const pz_metrics *m = result->metrics[i];
+            exceeds = f < m->face_count && fmax(fabs(m->strain_warp[f]), fabs(m->strain_weft[f])) > s;
+        }
+        over += exceeds ? areas[f] : 0;
+        total += areas[f];
+    }
+    free(areas);
+    return total > 0 ? over / total : 0;
+}
+
 pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
 {
     pz_verdict *verdict = &result->verdict;
@@ -242,6 +264,7 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
     if (status != PZ_OK)
         return pz_error(ctx, status, "%s", quiet.error);
     verdict->goals_met = 1;
+    verdict->area_over_strain = area_over_strain(result, goals.max_strain);
     for (int32_t p = 0; p < pattern->panel_count; ++p) {
         const pz_goal_result *panel = &verdict->panels[p];
         verdict->failing_panels += panel->failures != 0;

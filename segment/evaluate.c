@@ -74,11 +74,13 @@ static void layout_verdicts(const seg_layout *layout, int32_t p, pz_goal_result 
         goals->failures |= PZ_GOAL_VETOED;
 }
 
-/* Cache key of panel p: its faces and, for every outline edge, the first face of the panel across. */
+/* Cache key of panel p: the corner bound (above it a panel is not flattened: the piece budget lifts it,
+ * segment/budget.c), its faces and, for every outline edge, the first face of the panel across. */
 static uint64_t panel_key(const seg_layout *layout, int32_t p)
 {
     const pz_topology *t = layout->topology;
-    uint64_t hash = mix(0x5eed, (uint64_t)(layout->panel_offsets[p + 1] - layout->panel_offsets[p]));
+    uint64_t hash = mix(mix(0x5eed, (uint64_t)layout->goals.max_corners),
+                        (uint64_t)(layout->panel_offsets[p + 1] - layout->panel_offsets[p]));
     for (int32_t i = layout->panel_offsets[p]; i < layout->panel_offsets[p + 1]; ++i) {
         int32_t f = layout->panel_faces[i];
         hash = mix(hash, (uint64_t)f);
@@ -187,6 +189,7 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
             layout->panel_goals[p] = slot->goals;
             layout_verdicts(layout, p, &layout->panel_goals[p]);
             layout->panel_evaluated[p] = 1;
+            seg_panel_shape(layout, p);
         } else {
             miss[misses++] = p;
         }
@@ -232,6 +235,7 @@ pz_status seg_evaluate_panels(seg_layout *layout, const uint8_t *want, pz_ctx *c
             layout_verdicts(layout, miss[i], &layout->panel_goals[miss[i]]);
         }
         layout->panel_evaluated[miss[i]] = 1;
+        seg_panel_shape(layout, miss[i]);
     }
     layout->evaluation_count += misses;
     layout->evaluated_faces += miss_faces;

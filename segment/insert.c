@@ -19,6 +19,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "segment/internal.h"
+#include "core/heap.h"
 #include "core/vec.h"
 
 #include <math.h>
@@ -28,13 +29,49 @@
 
 /* Insertions per level at most: a guarantee that the run ends. */
 #define MAX_INSERTIONS_PER_LEVEL 64
+/* The insertion key is weight x min(distance, far enough), weight = (1 - PREFERENCE_WEIGHT +
+ * PREFERENCE_WEIGHT x preference) x (1 + alignment) / 2 (docs/segment.md, "Where seams go"). Far enough:
+ * FAR_ENOUGH_WIDTHS times the minimum piece width, at least FAR_ENOUGH_MM (a seam whose mean distance from
+ * another is that far keeps the strip between them wider than a sliver where the two waver together), or
+ * FAR_ENOUGH_REL of the bounding-box diagonal on a small model. */
+#define FAR_ENOUGH_MM 60.0
+#define FAR_ENOUGH_WIDTHS 2.5
+#define FAR_ENOUGH_REL 0.1
+#define PREFERENCE_WEIGHT 0.75
+/* A candidate preferred less than this is a seam of last resort: a removal pass comes first. */
+#define WEAK_PREFERENCE 0.5
+/* A band is split by a path at least this upright (mean |tangent . up|): one across it leaves two bands. */
+#define UPRIGHT 0.5
+/* A sketch end this near the border or a seam (share of the bounding-box diagonal) is carried on to it:
+ * the tolerance within which seamscore.py takes a seam for the designer's. A curve longer than
+ * SKETCH_SEAM_LENGTH of the diagonal is a seam (a dart is a fraction of its piece): both its ends reach the
+ * nearest border or seam. */
+#define SKETCH_REACH 0.03
+#define SKETCH_SEAM_LENGTH 0.25
 
 static pz_status nomem(pz_ctx *ctx)
 {
     return pz_error(ctx, PZ_ERR_NOMEM, "segment: out of memory");
 }
 
+/* A panel the insertion splits: 1 when it misses a goal a split mends (PZ_GOAL_SPLIT_MENDS: not the piece
+ * shapes), 2 when it is only a band round the body (segment/preference.c), 0 otherwise. */
+static int needs_split(const seg_layout *layout, int32_t p)
+{
+    return (seg_panel_failures(layout, p) & PZ_GOAL_SPLIT_MENDS) ? 1 : seg_panel_is_band(layout, p) ? 2 : 0;
+}
+
 static int32_t failing_panels(const seg_layout *layout)
+{
+    int32_t failing = 0;
+    for (int32_t p = 0; p < layout->panel_count; ++p)
+        failing += needs_split(layout, p) != 0;
+    return failing;
+}
+
+/* Panels that miss a goal a split mends (bands alone get no fallback cut: it would not be a seam a pattern
+ * maker draws). */
+static int32_t goal_failing_panels(const seg_layout *layout)
 {
     int32_t failing = 0;
     for (int32_t p = 0; p < layout->panel_count; ++p)
@@ -78,8 +115,11 @@ pz_status seg_add_path(seg_layout *layout, const pz_trace_path *path, int sketch
     return add_path(layout, path, sketch, ctx);
 }
 
-/* 1 when the path has an uncut interior edge inside a failing panel. */
-static int splits_failing(const seg_layout *layout, const pz_trace_path *path)
+/*
+ * 1 when the path has an uncut interior edge inside a panel to split: one that misses a goal, or, for a path
+ * running up and down (`upright`: a horizontal cut across a band leaves two bands), a band.
+ */
+static int splits_failing(const seg_layout *layout, const pz_trace_path *path, int upright)
 {
     const pz_topology *t = layout->topology;
     int32_t n = path->vertex_count, edges = path->closed ? n : n - 1;
@@ -87,7 +127,8 @@ static int splits_failing(const seg_layout *layout, const pz_trace_path *path)
         int32_t e = seg_edge_between(layout, path->vertices[i], path->vertices[(i + 1) % n]);
         if (e < 0 || layout->edge_cut[e] || t->edge_halfedge[2 * e + 1] < 0)
             continue;
-        if ((seg_panel_failures(layout, layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]) & PZ_GOAL_SPLIT_MENDS))
+        int why = needs_split(layout, layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])]);
+        if (why == 1 || (why == 2 && upright))
             return 1;
     }
     return 0;
@@ -151,6 +192,8 @@ typedef struct seg_candidate {
     pz_trace_path path;
     pz_trace_path mirror;
     int usable;
+    seg_preference preference;  /* of path (its mirror image scores alike) */
+    double weight;              /* the insertion key's factor: (1 - w0 + w0 score) x alignment */
 } seg_candidate;
 
 static void candidates_clear(seg_candidate *candidates, int32_t count)
@@ -197,8 +240,15 @@ static pz_status make_candidates(seg_layout *layout, pz_trace_paths *traced, seg
         return nomem(ctx);
     }
     const pz_symmetry *s = &layout->symmetry;
+    seg_girth_scratch *girth = seg_girth_scratch_new(layout);
+    if (!girth) {
+        free(candidates);
+        free(mark);
+        return nomem(ctx);
+    }
     int32_t kept = 0;
-    for (int32_t i = 0; i < n; ++i) {
+    pz_status status = PZ_OK;
+    for (int32_t i = 0; i < n && !status; ++i) {
         pz_trace_path *path = &traced->paths[i];
         if (plane_side(layout, path->vertices, path->vertex_count) > MIRRORED_SIDE_EDGES * layout->mean_edge)
             continue;
@@ -221,20 +271,73 @@ static pz_status make_candidates(seg_layout *layout, pz_trace_paths *traced, seg
                 c->usable = 0;
             }
         }
+        status = seg_preference_measure(layout, &c->path, girth, &c->preference, ctx);
         ++kept;
     }
+    /* One junction per limb, then the insertion key's weights. */
+    const pz_trace_path **loops = malloc(((size_t)kept + 1) * sizeof *loops);
+    seg_preference **prefs = malloc(((size_t)kept + 1) * sizeof *prefs);
+    if (!status && (!loops || !prefs))
+        status = nomem(ctx);
+    for (int32_t i = 0; !status && i < kept; ++i)
+        loops[i] = &candidates[i].path, prefs[i] = &candidates[i].preference;
+    if (!status)
+        status = seg_junctions_outermost(layout, loops, prefs, kept, ctx);
+    free(loops);
+    free(prefs);
+    for (int32_t i = 0; !status && i < kept; ++i)
+        candidates[i].weight = (1 - PREFERENCE_WEIGHT + PREFERENCE_WEIGHT * candidates[i].preference.score) *
+                               (0.5 + 0.5 * candidates[i].preference.alignment);
     free(mark);
+    seg_girth_scratch_free(girth);
     *out = candidates;
     *count = kept;
-    return PZ_OK;
+    if (status) {
+        candidates_clear(candidates, kept);
+        *out = NULL;
+        *count = 0;
+    }
+    return status;
 }
 
-/* 1 when some usable candidate (or its mirror) splits a failing panel: otherwise no distance is needed. */
+/* 1 when the panels to split all fail on their corners and nothing else a split mends. */
+static int corners_only(const seg_layout *layout)
+{
+    int any = 0;
+    for (int32_t p = 0; p < layout->panel_count; ++p) {
+        unsigned failures = seg_panel_failures(layout, p) & PZ_GOAL_SPLIT_MENDS;
+        if (failures & ~(unsigned)PZ_GOAL_CORNERS)
+            return 0;
+        any |= failures != 0;
+    }
+    return any;
+}
+
+/* 1 when a piece budget is set, the panels are at least that many and every one is a disk. */
+static int budget_reached(const seg_layout *layout)
+{
+    int32_t budget = layout->options->max_pieces;
+    if (budget <= 0 || layout->panel_count < budget)
+        return 0;
+    for (int32_t p = 0; p < layout->panel_count; ++p)
+        if (layout->panel_goals[p].failures & PZ_GOAL_NOT_DISK)
+            return 0;
+    return 1;
+}
+
+/* 1 when candidate c (or its mirror image) splits a panel to split. */
+static int helps(const seg_layout *layout, const seg_candidate *c)
+{
+    int upright = c->preference.vertical >= UPRIGHT;
+    return splits_failing(layout, &c->path, upright) ||
+           (c->mirror.vertex_count && splits_failing(layout, &c->mirror, upright));
+}
+
+/* 1 when some usable candidate helps: otherwise no distance is needed. */
 static int any_helpful(const seg_layout *layout, const seg_candidate *candidates, int32_t count)
 {
     for (int32_t i = 0; i < count; ++i)
-        if (candidates[i].usable && (splits_failing(layout, &candidates[i].path) ||
-                                     (candidates[i].mirror.vertex_count && splits_failing(layout, &candidates[i].mirror))))
+        if (candidates[i].usable && helps(layout, candidates + i))
             return 1;
     return 0;
 }
@@ -255,6 +358,12 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
     pz_status status = PZ_OK;
     /* The distance covers paths[0 .. measured - 1]; each round adds the paths inserted since (-1: none yet). */
     int32_t measured = -1;
+    /* Farther than this from every inserted path, a candidate is as good as any other: its preference decides. */
+    double far_enough = fmin(fmax(FAR_ENOUGH_MM, FAR_ENOUGH_WIDTHS * layout->goals.min_piece_width_mm),
+                             FAR_ENOUGH_REL * layout->frame.diagonal);
+    /* Nearer than the minimum piece width (on average) to the paths in, a candidate leaves a sliver. */
+    double too_near = layout->goals.min_piece_width_mm;
+    int tidied = 0; /* 1: the removal pass before the first weak candidate ran */
     for (int round = 0; round < MAX_INSERTIONS_PER_LEVEL && !status; ++round) {
         if ((status = pz_check_cancel(ctx, "segment")) || (status = seg_evaluate_panels(layout, NULL, ctx)))
             break;
@@ -274,16 +383,23 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
         measured = layout->path_count;
         if (status)
             break;
+        /* Seams a pattern maker draws first (preference >= WEAK_PREFERENCE), by weight x min(distance, far
+         * enough); when none helps, the paper's farthest first among the others. */
         int32_t best = -1;
-        double best_distance = -1;
+        int best_strong = 0;
+        double best_key = -1, best_distance = -1;
         for (int32_t i = 0; i < count; ++i) {
             seg_candidate *c = candidates + i;
             if (!c->usable)
                 continue;
-            if (!splits_failing(layout, &c->path) && !(c->mirror.vertex_count && splits_failing(layout, &c->mirror)))
+            if (!helps(layout, c))
                 continue;
             double d = pz_trace_path_mean_distance(&c->path, distance);
-            if (!(d > best_distance))
+            if (d < too_near)
+                continue; /* the strip between it and an inserted path would be a sliver */
+            int strong = c->preference.score >= WEAK_PREFERENCE;
+            double key = c->weight * fmin(d, strong ? far_enough : layout->frame.diagonal);
+            if (strong < best_strong || (strong == best_strong && !(key > best_key || (key == best_key && d > best_distance))))
                 continue;
             if (tangential_to_inserted(layout, &c->path) ||
                 (c->mirror.vertex_count && tangential_to_inserted(layout, &c->mirror))) {
@@ -291,10 +407,31 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
                 continue;
             }
             best = i;
+            best_strong = strong;
+            best_key = key;
             best_distance = d;
         }
         if (best < 0)
             break;
+        /* With a piece budget, the seams beyond the garment's own structure stop at the budget once every
+         * panel is a disk: the budget merges down, and strain is what it trades. */
+        if (!best_strong && budget_reached(layout))
+            break;
+        /* Before the first seam a pattern maker would not draw, when panels fail on corners alone, the
+         * redundant cuts go (small pieces left between parallel seams, their junctions): they can be why a
+         * large panel has too many corners. Once: a pass costs a trial per segment. */
+        if (candidates[best].preference.score < WEAK_PREFERENCE && !tidied && corners_only(layout)) {
+            int32_t removed = 0;
+            tidied = 1;
+            status = seg_remove_pass(layout, &removed, ctx);
+            layout->removed_early += removed;
+            if (!status && removed == 0)
+                status = seg_evaluate_panels(layout, NULL, ctx);
+            if (status)
+                break;
+            if (removed > 0)
+                continue;
+        }
         candidates[best].usable = 0;
         status = add_path(layout, &candidates[best].path, 0, ctx);
         if (!status && candidates[best].mirror.vertex_count)
@@ -397,7 +534,7 @@ static pz_status recurse_failing(seg_layout *layout, int32_t *inserted, pz_ctx *
         return nomem(ctx);
     pz_status status = PZ_OK;
     for (int32_t p = 0; p < panels && !status; ++p) {
-        if (!(seg_panel_failures(layout, p) & PZ_GOAL_SPLIT_MENDS))
+        if (!needs_split(layout, p))
             continue;
         if ((status = pz_check_cancel(ctx, "segment")))
             break;
@@ -430,6 +567,108 @@ static pz_status recurse_failing(seg_layout *layout, int32_t *inserted, pz_ctx *
 
 /* ---------------------------------------------------------------- stages */
 
+/*
+ * The vertex nearest to v (shortest edge path, 3D lengths) that is on the border or on a cut edge, within
+ * `reach`; -1 when none is. A bounded Dijkstra over the layout's vertex edges (scratch: vertex_count
+ * distances at INFINITY, left so).
+ */
+static int32_t nearest_seam_or_border(const seg_layout *layout, int32_t v, double reach, double *distance,
+                                      pz_heap *heap, int32_t *touched)
+{
+    const pz_topology *t = layout->topology;
+    int32_t count = 0, found = -1;
+    heap->count = 0;
+    distance[v] = 0;
+    touched[count++] = v;
+    if (!pz_heap_push(heap, 0, v))
+        return -1;
+    double d;
+    int32_t u;
+    while (found < 0 && pz_heap_pop(heap, &d, &u)) {
+        if (d > distance[u] || d > reach)
+            continue;
+        if (u != v && (t->vertex_on_boundary[u] || seg_cut_degree(layout, u) > 0)) {
+            found = u;
+            break;
+        }
+        for (int32_t i = layout->vertex_edge_offsets[u]; i < layout->vertex_edge_offsets[u + 1]; ++i) {
+            int32_t e = layout->vertex_edges[i], h = t->edge_halfedge[2 * e];
+            int32_t w = pz_he_from(t, h) == u ? pz_he_to(t, h) : pz_he_from(t, h);
+            double step = d + pz_vec3_distance(layout->mesh->positions + 3 * u, layout->mesh->positions + 3 * w);
+            if (step < distance[w] && step <= reach) {
+                if (distance[w] == INFINITY)
+                    touched[count++] = w;
+                distance[w] = step;
+                if (!pz_heap_push(heap, step, w))
+                    break;
+            }
+        }
+    }
+    for (int32_t i = 0; i < count; ++i)
+        distance[touched[i]] = INFINITY;
+    return found;
+}
+
+/*
+ * A sketched curve's open ends that stop short of the border or of a seam already cut (an earlier sketch)
+ * by less than SKETCH_REACH of the bounding-box diagonal are carried on to it: a designer's line drawn from
+ * the hem to the neckline means a seam from the hem to the neckline, not a slit that stops 2 cm short of
+ * both (which left the panel a slit to be cut round: 7 pieces became 12 on the DiffAvatar T-shirt). An
+ * end farther from both stays where it is: a dart's tip. *path is replaced when an end moved.
+ */
+static pz_status reach_seams(seg_layout *layout, pz_trace_path *path, pz_ctx *ctx)
+{
+    int32_t n = path->vertex_count;
+    if (path->closed || n < 2)
+        return PZ_OK;
+    int32_t vertex_count = layout->mesh->vertex_count;
+    double *distance = malloc((size_t)vertex_count * sizeof(double) + 1);
+    int32_t *touched = malloc((size_t)vertex_count * sizeof(int32_t) + 1);
+    int32_t *vertices = malloc(((size_t)n + 2) * sizeof(int32_t));
+    pz_heap heap = {0};
+    pz_status status = PZ_OK;
+    if (!distance || !touched || !vertices)
+        status = nomem(ctx);
+    int32_t ends[2] = {-1, -1};
+    /* A long curve is a seam whatever the gap; a short one may be a dart, whose tip stays inside. */
+    double reach = path->length_mm > SKETCH_SEAM_LENGTH * layout->frame.diagonal ? INFINITY
+                                                                                  : SKETCH_REACH * layout->frame.diagonal;
+    for (int32_t i = 0; !status && i < vertex_count; ++i)
+        distance[i] = INFINITY;
+    for (int k = 0; !status && k < 2; ++k) {
+        int32_t end = path->vertices[k ? n - 1 : 0];
+        if (!layout->topology->vertex_on_boundary[end] && seg_cut_degree(layout, end) == 0)
+            ends[k] = nearest_seam_or_border(layout, end, reach, distance, &heap, touched);
+        /* Not back to where the curve starts (a short dart drawn from the hem stays a dart). */
+        const double *other = layout->mesh->positions + 3 * path->vertices[k ? 0 : n - 1];
+        if (ends[k] >= 0 && pz_vec3_distance(layout->mesh->positions + 3 * ends[k], other) < 0.5 * path->length_mm)
+            ends[k] = -1;
+    }
+    if (!status && (ends[0] >= 0 || ends[1] >= 0)) {
+        int32_t count = 0;
+        if (ends[0] >= 0)
+            vertices[count++] = ends[0];
+        memcpy(vertices + count, path->vertices, (size_t)n * sizeof(int32_t));
+        count += n;
+        if (ends[1] >= 0)
+            vertices[count++] = ends[1];
+        pz_trace_path reached;
+        memset(&reached, 0, sizeof reached);
+        pz_ctx local;
+        pz_ctx_quiet(ctx, &local);
+        if (pz_trace_path_through(layout->graph, layout->mesh, layout->topology, vertices, count, 0, &reached,
+                                  &local) == PZ_OK) {
+            pz_trace_path_clear(path);
+            *path = reached;
+        }
+    }
+    free(distance);
+    free(touched);
+    free(vertices);
+    pz_heap_free(&heap);
+    return status;
+}
+
 pz_status seg_insert_sketches(seg_layout *layout, pz_ctx *ctx)
 {
     const pz_sketch *sketch = layout->options->sketch;
@@ -448,6 +687,8 @@ pz_status seg_insert_sketches(seg_layout *layout, pz_ctx *ctx)
         memset(&path, 0, sizeof path);
         pz_status status = pz_trace_snap_polyline(layout->graph, layout->mesh, layout->topology, points,
                                                   closed ? n - 1 : n, closed, 0, name, &path, ctx);
+        if (!status)
+            status = reach_seams(layout, &path, ctx);
         if (!status)
             status = add_path(layout, &path, SEG_SKETCH, ctx);
         pz_trace_path_clear(&path);
@@ -506,13 +747,14 @@ pz_status seg_insert_all(seg_layout *layout, pz_segment_result *result, pz_ctx *
     if (!status)
         status = insert_greedy(layout, candidates, count, &inserted, ctx);
     candidates_clear(candidates, count);
-    for (int32_t depth = 0; !status && depth < layout->max_depth && failing_panels(layout); ++depth) {
+    for (int32_t depth = 0; !status && depth < layout->max_depth && failing_panels(layout) && !budget_reached(layout);
+         ++depth) {
         int32_t more = 0;
         status = recurse_failing(layout, &more, ctx);
         if (!more)
             break;
     }
-    if (!status && failing_panels(layout))
+    if (!status && goal_failing_panels(layout) && !budget_reached(layout))
         status = seg_fallback_cuts(layout, &inserted, ctx);
     result->insert_ms = 1e3 * (pz_seconds() - start);
     return status;

@@ -51,6 +51,19 @@ typedef struct seg_segments {
     seg_segment *items;
 } seg_segments;
 
+/* The garment's axes for the pattern maker's preferences (segment/preference.c). */
+typedef struct seg_frame {
+    double up[3];            /* the garment's vertical (pz_mesh_vertical_axis) */
+    double side[3];          /* horizontal, left to right: the symmetry plane's normal, else the area's widest spread */
+    double front[3];         /* up x side */
+    double centre[3];        /* the area centroid (moved onto the symmetry plane when one is in use) */
+    double diagonal;         /* of the bounding box */
+    double total_area;
+    double mean_radius;      /* area-weighted mean distance of the faces from the vertical axis through centre */
+    int torso;               /* 1: 2 pi mean_radius exceeds the height: a body round the axis, whose bands split */
+    double *face_area;       /* face_count */
+} seg_frame;
+
 typedef struct seg_layout {
     const pz_mesh *mesh;
     const pz_topology *topology;
@@ -86,10 +99,13 @@ typedef struct seg_layout {
     int32_t *panel_faces;    /* face_count, each panel's faces increasing */
     pz_goal_result *panel_goals;
     uint8_t *panel_evaluated;
+    struct seg_shape *panel_shape;   /* per panel, set with its evaluation (seg_panel_shape) */
+    seg_frame frame;
     pz_segment_cache *cache;     /* options->cache, or own_cache */
     pz_segment_cache own_cache;
     struct seg_goal_scratch **goal_scratch; /* threads: evaluation scratch, created when first needed */
     int32_t evaluation_count;
+    int32_t removed_early;    /* segments removed during the insertion (before weak candidates) */
     int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
     double mean_edge;
     /* ctx->progress: the fraction reported last, and where the current part of the run ends (seg_progress). */
@@ -170,6 +186,44 @@ int seg_pair_goals(const seg_layout *layout, int32_t p, pz_goal_result *goals);
 /* The mirror panel of every panel (-1 none; itself when it straddles the plane): by the faces' mirror faces. */
 pz_status seg_mirror_panels(const seg_layout *layout, int32_t *mirror_panel, pz_ctx *ctx);
 
+/* preference.c: the pattern maker's preferences (docs/segment.md, "Where seams go"). */
+pz_status seg_frame_init(seg_layout *layout, pz_ctx *ctx);
+void seg_frame_clear(seg_frame *frame);
+/* What makes a set of faces a band round the body: its area (mm^2) and, for the large ones, how far it wraps
+ * round the vertical axis through the frame's centre (degrees), its length round that axis and its height. */
+typedef struct seg_shape {
+    double area, wrap_deg, girth, height;
+} seg_shape;
+void seg_faces_shape(const seg_layout *layout, const int32_t *faces, int32_t count, seg_shape *out);
+/* 1 for a large set of faces wrapped round the body, longer round it than high (a tube or C round the torso or
+ * the hips; not a collar, a cuff, a sleeve or a leg): the layout splits it. */
+int seg_shape_is_band(const seg_layout *layout, const seg_shape *shape);
+/* Panel p's shape into panel_shape[p] (seg_evaluate_panels calls it), and the test on it. */
+void seg_panel_shape(seg_layout *layout, int32_t p);
+int seg_panel_is_band(const seg_layout *layout, int32_t p);
+/* A candidate's preference, its parts and the score they make (0..1). */
+typedef struct seg_preference {
+    double vertical;     /* length-weighted mean |tangent . up| */
+    double silhouette;   /* length-weighted mean of max(0, 1 - 2 |normal . front|): faces sideways, up or down */
+    double centre;       /* length-weighted: on the mid-plane and running in it */
+    double widening;     /* loops: the mean girth of the wider side (both sides round the body) over the length */
+    double junction;     /* loops: the surface beyond is wider than the loop (0..1, from widening) */
+    double alignment;    /* length / cost: 1 on the field's arms */
+    int encircles;       /* loops: winds round the vertical axis (round the body, not a limb) */
+    int narrow_side;     /* loops round a limb: the limb's side (0: left of the loop's direction) */
+    double score;        /* loops: max(junction, silhouette, centre); border paths max(silhouette, centre,
+                            vertical / 2) */
+} seg_preference;
+typedef struct seg_girth_scratch seg_girth_scratch;
+seg_girth_scratch *seg_girth_scratch_new(const seg_layout *layout);
+void seg_girth_scratch_free(seg_girth_scratch *scratch);
+pz_status seg_preference_measure(const seg_layout *layout, const pz_trace_path *path, seg_girth_scratch *scratch,
+                                 seg_preference *out, pz_ctx *ctx);
+/* One junction per limb: a loop round a limb whose limb side lies inside another junction loop's, with a
+ * junction score no higher, loses its junction score (the limb meets the body at the other). */
+pz_status seg_junctions_outermost(const seg_layout *layout, const pz_trace_path *const *loops, seg_preference **prefs,
+                                  int32_t count, pz_ctx *ctx);
+
 /* removal.c */
 pz_status seg_segments_build(const seg_layout *layout, seg_segments *out, pz_ctx *ctx);
 void seg_segments_clear(seg_segments *segments);
@@ -178,5 +232,44 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx);
 /* Merges every panel that misses a piece-shape goal (PZ_GOAL_SHAPE) into a neighbour, even when the merged
  * panel then misses the strain goal (docs/segment.md, "Piece shapes"); *merged: the seams removed. */
 pz_status seg_merge_slivers(seg_layout *layout, int32_t *merged, pz_ctx *ctx);
+
+/* A set of edges changed together (a segment or part of it, plus its mirror image). */
+typedef struct seg_edge_set {
+    int32_t count;
+    int32_t *edges;
+} seg_edge_set;
+/*
+ * The mirror image of each segment of one seg_segments (built on it; the segments outlive the map): the
+ * segment the mirror images of its vertices touch most (removal.c). Without a plane the map is empty and
+ * every segment has no mirror. claimed[i] = 1 for a segment of half 1 that is the image of one of half 0:
+ * it goes with that one and is not tried on its own.
+ */
+typedef struct seg_mirror_map {
+    const seg_segments *segments;
+    int32_t *edge_segment;   /* edge_count: the segment of each cut edge (-1 uncut) */
+    int32_t *votes;          /* segment count: zero between calls */
+    int32_t *touched;        /* segment count: the segments voted for in one call */
+    int32_t *mirror;         /* segment count: the mirror segment, -2 not yet known */
+    uint8_t *claimed;        /* segment count (NULL without a plane) */
+} seg_mirror_map;
+/* 0 when out of memory (nothing to free then). */
+int seg_mirror_map_build(const seg_layout *layout, const seg_segments *segments, seg_mirror_map *map);
+void seg_mirror_map_free(seg_mirror_map *map);
+/* edges[0..n-1] (segment `index` of the map's segments, or a part of it from one end) and, with symmetry, their
+ * mirror image's edges that are cut and not sketched. 0: out of memory. The caller frees out->edges. */
+int seg_edge_set_make(const seg_layout *layout, seg_mirror_map *map, int32_t index, const int32_t *edges, int32_t n,
+                      seg_edge_set *out);
+/* Sets the set's cut flags to `cut` (labels become invalid). */
+void seg_edge_set_apply(seg_layout *layout, const seg_edge_set *set, uint8_t cut);
+/* 1 when, with the set uncut, some inner vertex keeps exactly one cut edge (a stub). */
+int seg_leaves_stub(seg_layout *layout, const seg_edge_set *set);
+/* 1 when every edge of the segment is cut. */
+int seg_all_cut(const seg_layout *layout, const seg_segment *s);
+
+/* budget.c (docs/segment.md, "A piece budget and the trade-off"): merges panels down to options->max_pieces;
+ * the merge sequence from the current layout (out->count steps, [0] the layout as it is) until one panel is
+ * left, no merge is valid or the worst strain exceeds stop_strain. Both lift the corner bound. */
+pz_status seg_budget_merge(seg_layout *layout, pz_segment_result *result, pz_ctx *ctx);
+pz_status seg_merge_sequence(seg_layout *layout, double stop_strain, pz_segment_tradeoff *out, pz_ctx *ctx);
 
 #endif

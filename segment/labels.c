@@ -63,7 +63,10 @@ static pz_status panel_arrays_resize(seg_layout *layout, int32_t panels, pz_ctx 
     uint8_t *evaluated = realloc(layout->panel_evaluated, (size_t)panels + 1);
     if (evaluated)
         layout->panel_evaluated = evaluated;
-    if (!offsets || !goals || !evaluated)
+    seg_shape *shape = realloc(layout->panel_shape, ((size_t)panels + 1) * sizeof(seg_shape));
+    if (shape)
+        layout->panel_shape = shape;
+    if (!offsets || !goals || !evaluated || !shape)
         return nomem(ctx);
     memset(evaluated, 0, (size_t)panels + 1);
     layout->panel_count = panels;

@@ -314,6 +314,8 @@ static void layout_free(seg_layout *layout)
     free(layout->label_spare);
     free(layout->panel_goals);
     free(layout->panel_evaluated);
+    free(layout->panel_shape);
+    seg_frame_clear(&layout->frame);
     free(layout->own_cache.entries);
     for (int32_t t = 0; layout->goal_scratch && t < layout->threads; ++t)
         seg_goal_scratch_free(layout->goal_scratch[t]);
@@ -324,7 +326,7 @@ static pz_status check_options(const pz_segment_options *options, pz_ctx *ctx)
 {
     if (!(options->strain_margin >= 0 && options->strain_margin <= 0.9))
         return pz_error(ctx, PZ_ERR_USAGE, "segment: strain margin %g is not within 0 .. 0.9", options->strain_margin);
-    if (!(options->max_strain >= 0) || options->max_corners < 0 || options->max_candidates < 0 ||
+    if (!(options->max_strain >= 0) || options->max_corners < 0 || options->max_candidates < 0 || options->max_pieces < 0 ||
         options->max_depth < 0 || options->threads < 0)
         return pz_error(ctx, PZ_ERR_USAGE, "segment: negative strain, corner, candidate, depth or thread option");
     if (!(options->min_piece_width_mm >= 0) || !(options->min_piece_area >= 0 && options->min_piece_area < 1) ||
@@ -416,6 +418,8 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
     }
     if (!status && !(status = pz_check_cancel(ctx, "segment")))
         status = detect_symmetry(&layout, ctx);
+    if (!status)
+        status = seg_frame_init(&layout, ctx);
     result->graph_ms = 1e3 * (pz_seconds() - start);
     if (!status && !(status = pz_check_cancel(ctx, "segment")))
         status = seg_insert_sketches(&layout, ctx);
@@ -430,9 +434,15 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
         status = seg_insert_all(&layout, result, ctx);
     }
     result->inserted_count = layout.path_count;
+    result->removed_count = layout.removed_early;
     if (!status) {
         seg_progress_part(&layout, 0.97, "remove", ctx);
         status = remove_and_dart(&layout, result, ctx);
+    }
+    if (!status) {
+        double budget_start = pz_seconds();
+        status = seg_budget_merge(&layout, result, ctx);
+        result->budget_ms = 1e3 * (pz_seconds() - budget_start);
     }
     if (!status) {
         seg_progress_part(&layout, 1.0, "result", ctx);
@@ -453,6 +463,37 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
                 result->goals_met ? "" : ", goals not met");
     *out = result;
     return PZ_OK;
+}
+
+pz_status pz_segment_merge_sequence(const pz_mesh *mesh, const pz_topology *topology,
+                                    const pz_segment_options *options, const uint8_t *edge_cut, double stop_strain,
+                                    pz_segment_tradeoff *out, pz_ctx *ctx)
+{
+    if (!mesh || !topology || !options || !edge_cut || !out)
+        return pz_error(ctx, PZ_ERR_USAGE, "segment: merge sequence without a mesh, options, cuts or output");
+    memset(out, 0, sizeof *out);
+    pz_status status = check_options(options, ctx);
+    if (status)
+        return status;
+    double start = pz_seconds();
+    seg_layout layout;
+    memset(&layout, 0, sizeof layout);
+    status = layout_init(&layout, mesh, topology, NULL, options, ctx);
+    if (!status)
+        status = detect_symmetry(&layout, ctx);
+    if (!status)
+        status = seg_frame_init(&layout, ctx);
+    if (!status)
+        status = seg_insert_seeds(&layout, ctx);
+    for (int32_t e = 0; !status && e < topology->edge_count; ++e)
+        layout.edge_cut[e] |= edge_cut[e] != 0;
+    if (!status)
+        status = seg_label_panels(&layout, ctx);
+    if (!status)
+        status = seg_merge_sequence(&layout, stop_strain, out, ctx);
+    layout_free(&layout);
+    out->ms = 1e3 * (pz_seconds() - start);
+    return status;
 }
 
 void pz_segment_result_free(pz_segment_result **result)

@@ -57,7 +57,11 @@ static double face_area(const pz_mesh *mesh, int32_t f)
 
 /*
  * Flips to the other half every component (faces of `which` half joined
- * across edges) whose area is below ISLAND_SHARE of `total`. stack: face_count.
+ * across edges not cut yet) whose area is below ISLAND_SHARE of `total`.
+ * stack: face_count. The cuts made before the plane's are the sketches and
+ * seeds: a designer's centre line drawn near the plane leaves strips between
+ * it and the plane that become their neighbours' half, so the halves meet
+ * along the designer's line and no sliver is left between two seams.
  */
 static void flip_islands(const seg_layout *layout, uint8_t *half, uint8_t which, double total, int32_t *stack,
                          uint8_t *seen)
@@ -77,7 +81,7 @@ static void flip_islands(const seg_layout *layout, uint8_t *half, uint8_t which,
             for (int k = 0; k < 3; ++k) {
                 int32_t twin = t->twin[3 * f + k];
                 int32_t g = twin >= 0 ? pz_he_face(twin) : -1;
-                if (g >= 0 && !seen[g] && half[g] == which) {
+                if (g >= 0 && !seen[g] && half[g] == which && !layout->edge_cut[t->halfedge_edge[3 * f + k]]) {
                     seen[g] = 1;
                     stack[top++] = g;
                 }

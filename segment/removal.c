@@ -194,22 +194,14 @@ void seg_segments_clear(seg_segments *segments)
  * mirrored path closed that gap with other edges), so an edge-wise map misses
  * part of the mirror seam, and uncutting the rest would leave a stub.
  */
-typedef struct mirror_map {
-    const seg_segments *segments;
-    int32_t *edge_segment;   /* edge_count: the segment of each cut edge (-1 uncut) */
-    int32_t *votes;          /* segment count: zero between calls */
-    int32_t *touched;        /* segment count: the segments voted for in one call */
-    int32_t *mirror;         /* segment count: the mirror segment, -2 not yet known */
-    uint8_t *claimed;        /* segment count: 1 for a segment of half 1 that is the image of one of half 0 */
-} mirror_map;
 
-static void mirror_map_free(mirror_map *map)
+void seg_mirror_map_free(seg_mirror_map *map)
 {
     free(map->edge_segment), free(map->votes), free(map->touched), free(map->mirror), free(map->claimed);
     memset(map, 0, sizeof *map);
 }
 
-static int32_t mirror_segment(const seg_layout *layout, mirror_map *map, int32_t index);
+static int32_t mirror_segment(const seg_layout *layout, seg_mirror_map *map, int32_t index);
 
 /* The half a segment lies in (segment/mirror.c): the one most of its edges lie inside; 2 on the plane cut,
  * -1 without halves. */
@@ -229,7 +221,7 @@ static int segment_half(const seg_layout *layout, const seg_segment *s)
 }
 
 /* 0 when out of memory. Without a plane the map is empty (every segment without a mirror). */
-static int mirror_map_build(const seg_layout *layout, const seg_segments *segments, mirror_map *map)
+int seg_mirror_map_build(const seg_layout *layout, const seg_segments *segments, seg_mirror_map *map)
 {
     memset(map, 0, sizeof *map);
     map->segments = segments;
@@ -242,7 +234,7 @@ static int mirror_map_build(const seg_layout *layout, const seg_segments *segmen
     map->mirror = malloc(count * sizeof(int32_t));
     map->claimed = calloc(count, 1);
     if (!map->edge_segment || !map->votes || !map->touched || !map->mirror || !map->claimed) {
-        mirror_map_free(map);
+        seg_mirror_map_free(map);
         return 0;
     }
     memset(map->edge_segment, 0xff, (size_t)layout->topology->edge_count * sizeof(int32_t));
@@ -264,7 +256,7 @@ static int mirror_map_build(const seg_layout *layout, const seg_segments *segmen
 }
 
 /* The mirror segment of segment `index` by the votes of its vertices' images (-1 none). */
-static int32_t vote_mirror(const seg_layout *layout, mirror_map *map, int32_t index)
+static int32_t vote_mirror(const seg_layout *layout, seg_mirror_map *map, int32_t index)
 {
     const seg_segment *s = map->segments->items + index;
     const int32_t *vertex_mirror = layout->symmetry.vertex_mirror;
@@ -298,7 +290,7 @@ static int32_t vote_mirror(const seg_layout *layout, mirror_map *map, int32_t in
 }
 
 /* The mirror segment of segment `index` (itself for a segment that is its own image), -1 none; computed once. */
-static int32_t mirror_segment(const seg_layout *layout, mirror_map *map, int32_t index)
+static int32_t mirror_segment(const seg_layout *layout, seg_mirror_map *map, int32_t index)
 {
     if (!map->mirror)
         return -1;
@@ -316,7 +308,7 @@ static int32_t mirror_segment(const seg_layout *layout, mirror_map *map, int32_t
  * other): a segment whose image is part of a longer one takes that part
  * only. Returns the count.
  */
-static int32_t mirror_edges(const seg_layout *layout, mirror_map *map, int32_t index, const int32_t *edges,
+static int32_t mirror_edges(const seg_layout *layout, seg_mirror_map *map, int32_t index, const int32_t *edges,
                             int32_t n, int32_t *out)
 {
     int32_t m = mirror_segment(layout, map, index);
@@ -343,16 +335,10 @@ static int32_t mirror_edges(const seg_layout *layout, mirror_map *map, int32_t i
     return last - first;
 }
 
-/* A set of edges changed together (a segment or part of it, plus its mirror image). */
-typedef struct edge_set {
-    int32_t count;
-    int32_t *edges;
-} edge_set;
-
 /* edges[0..n-1] (segment `index` or a part of it from one end) and, with symmetry, their mirror image's edges
  * that are cut and not sketched. */
-static int edge_set_make(const seg_layout *layout, mirror_map *map, int32_t index, const int32_t *edges, int32_t n,
-                         edge_set *out)
+int seg_edge_set_make(const seg_layout *layout, seg_mirror_map *map, int32_t index, const int32_t *edges, int32_t n,
+                      seg_edge_set *out)
 {
     int32_t m = mirror_segment(layout, map, index);
     int32_t mirror_count = m >= 0 ? map->segments->items[m].edge_count : 0;
@@ -376,7 +362,7 @@ static int edge_set_make(const seg_layout *layout, mirror_map *map, int32_t inde
     return 1;
 }
 
-static void edge_set_apply(seg_layout *layout, const edge_set *set, uint8_t cut)
+void seg_edge_set_apply(seg_layout *layout, const seg_edge_set *set, uint8_t cut)
 {
     for (int32_t i = 0; i < set->count; ++i)
         layout->edge_cut[set->edges[i]] = cut;
@@ -384,11 +370,11 @@ static void edge_set_apply(seg_layout *layout, const edge_set *set, uint8_t cut)
 }
 
 /* 1 when, with the set uncut, some inner vertex keeps exactly one cut edge (a stub). */
-static int leaves_stub(seg_layout *layout, const edge_set *set)
+int seg_leaves_stub(seg_layout *layout, const seg_edge_set *set)
 {
     const pz_topology *t = layout->topology;
     int labels_valid = layout->labels_valid; /* the flags come back as they were */
-    edge_set_apply(layout, set, 0);
+    seg_edge_set_apply(layout, set, 0);
     int stub = 0;
     for (int32_t i = 0; i < set->count && !stub; ++i) {
         int32_t h = t->edge_halfedge[2 * set->edges[i]];
@@ -396,7 +382,7 @@ static int leaves_stub(seg_layout *layout, const edge_set *set)
         for (int k = 0; k < 2 && !stub; ++k)
             stub = !t->vertex_on_boundary[ends[k]] && seg_cut_degree(layout, ends[k]) == 1;
     }
-    edge_set_apply(layout, set, 1);
+    seg_edge_set_apply(layout, set, 1);
     layout->labels_valid = labels_valid;
     return stub;
 }
@@ -427,14 +413,14 @@ static int removable_edge(const seg_layout *layout, int32_t e)
  * most MIRROR_STUB_EDGES edges, no sketch) go with the set rather than block
  * the removal. Returns 0 when out of memory.
  */
-static int take_mirror_stubs(seg_layout *layout, edge_set *set)
+static int take_mirror_stubs(seg_layout *layout, seg_edge_set *set)
 {
     if (!layout->face_half)
         return 1;
     const pz_topology *t = layout->topology;
     int labels_valid = layout->labels_valid;
     int ok = 1;
-    edge_set_apply(layout, set, 0);
+    seg_edge_set_apply(layout, set, 0);
     for (int32_t i = 0; i < set->count && ok; ++i) {
         int32_t h = t->edge_halfedge[2 * set->edges[i]];
         int32_t ends[2] = {pz_he_from(t, h), pz_he_to(t, h)};
@@ -462,13 +448,15 @@ static int take_mirror_stubs(seg_layout *layout, edge_set *set)
             }
         }
     }
-    edge_set_apply(layout, set, 1);
+    seg_edge_set_apply(layout, set, 1);
     layout->labels_valid = labels_valid;
     return ok;
 }
 
-/* Relabels and evaluates the panels next to the set's edges; *ok = 1 when none fails a goal in `mask`. */
-static pz_status panels_pass(seg_layout *layout, const edge_set *set, unsigned mask, int *ok, pz_ctx *ctx)
+/* Relabels and evaluates the panels next to the set's edges (a mirror pair's both panels); *ok = 1 when none fails a
+ * goal in `mask` (nor, with `bands`, is a band round the body: segment/preference.c). */
+static pz_status panels_pass(seg_layout *layout, const seg_edge_set *set, unsigned mask, int bands, int *ok,
+                             pz_ctx *ctx)
 {
     *ok = 0;
     pz_status status = seg_label_panels(layout, ctx);
@@ -489,20 +477,31 @@ static pz_status panels_pass(seg_layout *layout, const edge_set *set, unsigned m
         if (q >= 0 && !want[q])
             want[q] = 2;
     }
+    /* A band is known from the faces alone: no flattening for it. */
+    for (int32_t p = 0; bands && p < layout->panel_count; ++p) {
+        if (!want[p])
+            continue;
+        seg_panel_shape(layout, p);
+        if (seg_panel_is_band(layout, p)) {
+            free(want);
+            return PZ_OK;
+        }
+    }
     status = seg_evaluate_panels(layout, want, ctx);
     *ok = !status;
     for (int32_t p = 0; p < layout->panel_count && *ok; ++p)
-        if (want[p] && (seg_panel_failures(layout, p) & mask))
+        if (want[p] && ((seg_panel_failures(layout, p) & mask) || (bands && seg_panel_is_band(layout, p))))
             *ok = 0;
     free(want);
     return status;
 }
 
 /* Every goal but the piece shapes: merging panels never makes one narrower or smaller (its largest circle
- * and its area only grow), so a panel next to the set that misses them (a sketch's sliver) blocks nothing. */
-static pz_status panels_ok(seg_layout *layout, const edge_set *set, int *ok, pz_ctx *ctx)
+ * and its area only grow), so a panel next to the set that misses them (a sketch's sliver) blocks nothing;
+ * and no band round the body (segment/preference.c). */
+static pz_status panels_ok(seg_layout *layout, const seg_edge_set *set, int *ok, pz_ctx *ctx)
 {
-    return panels_pass(layout, set, ~(unsigned)PZ_GOAL_SHAPE, ok, ctx);
+    return panels_pass(layout, set, ~(unsigned)PZ_GOAL_SHAPE, 1, ok, ctx);
 }
 
 /*
@@ -510,9 +509,9 @@ static pz_status panels_ok(seg_layout *layout, const edge_set *set, int *ok, pz_
  * injectivity: re-gluing only adds faces to it, so the trial would fail (with
  * unreachable goals, S = 0, this spares a flattening per segment).
  */
-static pz_status worth_trying(seg_layout *layout, const edge_set *set, int *worth, pz_ctx *ctx)
+static pz_status worth_trying(seg_layout *layout, const seg_edge_set *set, int *worth, pz_ctx *ctx)
 {
-    return panels_pass(layout, set, PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED, worth, ctx);
+    return panels_pass(layout, set, PZ_GOAL_STRAIN | PZ_GOAL_NOT_INJECTIVE | PZ_GOAL_VETOED, 0, worth, ctx);
 }
 
 /* ---------------------------------------------------------------- removal */
@@ -548,7 +547,7 @@ static int compare_removal(const void *l, const void *r)
     return (a->first_edge > b->first_edge) - (a->first_edge < b->first_edge);
 }
 
-static int all_cut(const seg_layout *layout, const seg_segment *s)
+int seg_all_cut(const seg_layout *layout, const seg_segment *s)
 {
     for (int32_t i = 0; i < s->edge_count; ++i)
         if (!layout->edge_cut[s->edges[i]])
@@ -557,24 +556,24 @@ static int all_cut(const seg_layout *layout, const seg_segment *s)
 }
 
 /* Tries to uncut segment `index` (with its mirror); *removed = 1 when kept uncut. */
-static pz_status try_remove(seg_layout *layout, mirror_map *map, int32_t index, int *removed, pz_ctx *ctx)
+static pz_status try_remove(seg_layout *layout, seg_mirror_map *map, int32_t index, int *removed, pz_ctx *ctx)
 {
     *removed = 0;
     const seg_segment *s = map->segments->items + index;
-    edge_set set;
-    if (!edge_set_make(layout, map, index, s->edges, s->edge_count, &set) || !take_mirror_stubs(layout, &set)) {
+    seg_edge_set set;
+    if (!seg_edge_set_make(layout, map, index, s->edges, s->edge_count, &set) || !take_mirror_stubs(layout, &set)) {
         free(set.edges);
         return nomem(ctx);
     }
     int worth = 0;
-    int stub = leaves_stub(layout, &set);
+    int stub = seg_leaves_stub(layout, &set);
     pz_status status = stub ? PZ_OK : worth_trying(layout, &set, &worth, ctx);
     if (!status && worth) {
         int ok = 0;
-        edge_set_apply(layout, &set, 0);
+        seg_edge_set_apply(layout, &set, 0);
         status = panels_ok(layout, &set, &ok, ctx);
         if (!status && !ok) {
-            edge_set_apply(layout, &set, 1);
+            seg_edge_set_apply(layout, &set, 1);
             status = seg_label_panels(layout, ctx);
         }
         *removed = ok && !status;
@@ -592,8 +591,8 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
         if ((status = seg_segments_build(layout, &segments, ctx)))
             break;
         removal_order *order = malloc(((size_t)segments.count + 1) * sizeof *order);
-        mirror_map map;
-        if (!order || !mirror_map_build(layout, &segments, &map)) {
+        seg_mirror_map map;
+        if (!order || !seg_mirror_map_build(layout, &segments, &map)) {
             free(order);
             seg_segments_clear(&segments);
             return nomem(ctx);
@@ -606,7 +605,7 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
         int32_t before = *removed;
         for (int32_t i = 0; i < segments.count && !status; ++i) {
             const seg_segment *s = segments.items + order[i].segment;
-            if (s->sketch || !all_cut(layout, s) || (map.claimed && map.claimed[order[i].segment]))
+            if (s->sketch || !seg_all_cut(layout, s) || (map.claimed && map.claimed[order[i].segment]))
                 continue;
             if ((status = pz_check_cancel(ctx, "segment")))
                 break;
@@ -618,7 +617,7 @@ pz_status seg_remove_pass(seg_layout *layout, int32_t *removed, pz_ctx *ctx)
             }
         }
         free(order);
-        mirror_map_free(&map);
+        seg_mirror_map_free(&map);
         seg_segments_clear(&segments);
         if (*removed == before)
             break;
@@ -702,6 +701,26 @@ static double merged_extent(const seg_layout *layout, int32_t a, int32_t b)
     return sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) + (hi[2] - lo[2]) * (hi[2] - lo[2]));
 }
 
+/* 1 when the two panels on the sides of edge e, joined, make a band round the body (segment/preference.c). */
+static int merged_is_band(const seg_layout *layout, int32_t e)
+{
+    const pz_topology *t = layout->topology;
+    int32_t a = layout->face_panel[pz_he_face(t->edge_halfedge[2 * e])];
+    int32_t b = layout->face_panel[pz_he_face(t->edge_halfedge[2 * e + 1])];
+    int32_t na = layout->panel_offsets[a + 1] - layout->panel_offsets[a];
+    int32_t nb = layout->panel_offsets[b + 1] - layout->panel_offsets[b];
+    int32_t *faces = malloc(((size_t)na + nb + 1) * sizeof(int32_t));
+    if (!faces)
+        return 0;
+    memcpy(faces, layout->panel_faces + layout->panel_offsets[a], (size_t)na * sizeof(int32_t));
+    memcpy(faces + na, layout->panel_faces + layout->panel_offsets[b], (size_t)nb * sizeof(int32_t));
+    seg_shape shape;
+    seg_faces_shape(layout, faces, na + nb, &shape);
+    int band = seg_shape_is_band(layout, &shape);
+    free(faces);
+    return band;
+}
+
 static double edges_length(const seg_layout *layout, const int32_t *edges, int32_t n)
 {
     double sum = 0;
@@ -715,10 +734,10 @@ static double edges_length(const seg_layout *layout, const int32_t *edges, int32
 }
 
 /* A segment can become a dart when it is open, long enough and neither end is a tip already. */
-static int dart_candidate(const seg_layout *layout, mirror_map *map, int32_t index)
+static int dart_candidate(const seg_layout *layout, seg_mirror_map *map, int32_t index)
 {
     const seg_segment *s = map->segments->items + index;
-    if (s->sketch || s->closed || s->edge_count < 2 * DART_MIN_PIECES || !all_cut(layout, s))
+    if (s->sketch || s->closed || s->edge_count < 2 * DART_MIN_PIECES || !seg_all_cut(layout, s))
         return 0;
     const pz_topology *t = layout->topology;
     int32_t ends[2] = {s->vertices[0], s->vertices[s->edge_count]};
@@ -750,17 +769,17 @@ static void orient_from_low_end(const seg_layout *layout, const seg_segment *s, 
  * touched and puts the flags back: *ok = 1 when every such panel meets the
  * goals; *probe = the goals of the panel holding edge probe_edge.
  */
-static pz_status measure_glued(seg_layout *layout, mirror_map *map, int32_t index, const int32_t *edges,
+static pz_status measure_glued(seg_layout *layout, seg_mirror_map *map, int32_t index, const int32_t *edges,
                                int32_t glued, int32_t probe_edge, int *ok, pz_goal_result *probe, pz_ctx *ctx)
 {
-    edge_set set;
-    if (!edge_set_make(layout, map, index, edges, glued, &set))
+    seg_edge_set set;
+    if (!seg_edge_set_make(layout, map, index, edges, glued, &set))
         return nomem(ctx);
-    edge_set_apply(layout, &set, 0);
+    seg_edge_set_apply(layout, &set, 0);
     pz_status status = panels_ok(layout, &set, ok, ctx);
     if (!status)
         *probe = layout->panel_goals[layout->face_panel[pz_he_face(layout->topology->edge_halfedge[2 * probe_edge])]];
-    edge_set_apply(layout, &set, 1);
+    seg_edge_set_apply(layout, &set, 1);
     free(set.edges);
     return status;
 }
@@ -792,7 +811,7 @@ static int dart_hopeful(const seg_layout *layout, const pz_goal_result *full)
  * (measured: strain 0.2-0.5 there on the generated skirt). Darts longer than
  * DART_MAX_EXTENT_FRACTION of the merged panel's extent are not evaluated.
  */
-static pz_status try_dart(seg_layout *layout, mirror_map *map, int32_t index, const double *defect, int *made,
+static pz_status try_dart(seg_layout *layout, seg_mirror_map *map, int32_t index, const double *defect, int *made,
                           pz_ctx *ctx)
 {
     *made = 0;
@@ -802,14 +821,17 @@ static pz_status try_dart(seg_layout *layout, mirror_map *map, int32_t index, co
     if (!edges)
         return nomem(ctx);
     orient_from_low_end(layout, s, defect, edges);
-    edge_set whole;
-    if (!edge_set_make(layout, map, index, edges, n, &whole)) {
+    seg_edge_set whole;
+    if (!seg_edge_set_make(layout, map, index, edges, n, &whole)) {
         free(edges);
         return nomem(ctx);
     }
     int worth = 0;
     pz_status status = worth_trying(layout, &whole, &worth, ctx);
     free(whole.edges);
+    /* A dart joins the two panels into one (with a slit): never into a band round the body. */
+    if (!status && worth && merged_is_band(layout, edges[0]))
+        worth = 0;
     const pz_topology *t = layout->topology;
     double max_leg = 0;
     if (!status && worth) {
@@ -837,11 +859,11 @@ static pz_status try_dart(seg_layout *layout, mirror_map *map, int32_t index, co
             break; /* the merged panel's topology does not depend on the dart's length */
     }
     if (!status && best > 0) {
-        edge_set set;
-        if (!edge_set_make(layout, map, index, edges, best, &set)) {
+        seg_edge_set set;
+        if (!seg_edge_set_make(layout, map, index, edges, best, &set)) {
             status = nomem(ctx);
         } else {
-            edge_set_apply(layout, &set, 0);
+            seg_edge_set_apply(layout, &set, 0);
             free(set.edges);
             *made = 1;
         }
@@ -865,9 +887,9 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
     int32_t vertex_count = layout->topology->vertex_count;
     uint8_t *mark = calloc((size_t)vertex_count + 1, 1);
     int32_t *visited = malloc(((size_t)vertex_count + 1) * sizeof(int32_t));
-    mirror_map map;
+    seg_mirror_map map;
     memset(&map, 0, sizeof map);
-    if (!status && (!order || !mark || !visited || !mirror_map_build(layout, &segments, &map)))
+    if (!status && (!order || !mark || !visited || !seg_mirror_map_build(layout, &segments, &map)))
         status = nomem(ctx);
     for (int32_t i = 0; !status && i < segments.count; ++i) {
         order[i].segment = i;
@@ -892,7 +914,7 @@ pz_status seg_dart_pass(seg_layout *layout, int32_t *darts, pz_ctx *ctx)
     free(order);
     free(mark);
     free(visited);
-    mirror_map_free(&map);
+    seg_mirror_map_free(&map);
     seg_segments_clear(&segments);
     free(defect);
     return status;
@@ -916,9 +938,9 @@ static int merge_better(const merge_score *a, const merge_score *b)
 }
 
 /* Uncuts the set, scores the panels next to it and cuts it again; *ring = 1 when one is no disk. */
-static pz_status score_merge(seg_layout *layout, const edge_set *set, merge_score *score, int *ring, pz_ctx *ctx)
+static pz_status score_merge(seg_layout *layout, const seg_edge_set *set, merge_score *score, int *ring, pz_ctx *ctx)
 {
-    edge_set_apply(layout, set, 0);
+    seg_edge_set_apply(layout, set, 0);
     pz_status status = seg_label_panels(layout, ctx);
     uint8_t *want = status ? NULL : calloc((size_t)layout->panel_count + 1, 1);
     if (!status && !want)
@@ -942,7 +964,7 @@ static pz_status score_merge(seg_layout *layout, const edge_set *set, merge_scor
         score->strain = fmax(score->strain, goals->max_abs_strain >= 0 ? goals->max_abs_strain : INFINITY);
     }
     free(want);
-    edge_set_apply(layout, set, 1);
+    seg_edge_set_apply(layout, set, 1);
     return status;
 }
 
@@ -964,7 +986,7 @@ static int32_t next_sliver(const seg_layout *layout, const uint8_t *given_up)
  * edge left is a stub, and the chain from it up to the next node goes too (a slit that separates nothing:
  * both its sides are the merged panel). 0 when out of memory.
  */
-static int with_stubs(seg_layout *layout, edge_set *set)
+static int with_stubs(seg_layout *layout, seg_edge_set *set)
 {
     const pz_topology *t = layout->topology;
     int32_t capacity = set->count + 16;
@@ -973,7 +995,7 @@ static int with_stubs(seg_layout *layout, edge_set *set)
         return 0;
     set->edges = grown;
     int labels_valid = layout->labels_valid; /* the flags come back as they were */
-    edge_set_apply(layout, set, 0);
+    seg_edge_set_apply(layout, set, 0);
     int ok = 1;
     for (int32_t i = 0; ok && i < set->count; ++i) {
         int32_t h = t->edge_halfedge[2 * set->edges[i]];
@@ -999,7 +1021,7 @@ static int with_stubs(seg_layout *layout, edge_set *set)
                 v = other_end(layout, e, v);
             }
     }
-    edge_set_apply(layout, set, 1);
+    seg_edge_set_apply(layout, set, 1);
     layout->labels_valid = labels_valid;
     return ok;
 }
@@ -1017,24 +1039,24 @@ static int bounds_panel(const seg_layout *layout, const seg_segment *s, int32_t 
 
 /* The best seam of panel p to remove (a set with its mirror image) into *best; best->edges NULL: none
  * keeps the merged panels disks. */
-static pz_status best_merge(seg_layout *layout, int32_t p, edge_set *best, pz_ctx *ctx)
+static pz_status best_merge(seg_layout *layout, int32_t p, seg_edge_set *best, pz_ctx *ctx)
 {
     best->edges = NULL;
     best->count = 0;
     seg_segments segments;
-    mirror_map map;
+    seg_mirror_map map;
     memset(&map, 0, sizeof map);
     pz_status status = seg_segments_build(layout, &segments, ctx);
-    if (!status && !mirror_map_build(layout, &segments, &map))
+    if (!status && !seg_mirror_map_build(layout, &segments, &map))
         status = nomem(ctx);
     merge_score best_score = {0, 0, 0};
     for (int32_t i = 0; !status && i < segments.count; ++i) {
         const seg_segment *s = segments.items + i;
-        /* A seam on half 1 that is the image of one on half 0 goes with it (edge_set_make adds the image). */
-        if (s->sketch || !all_cut(layout, s) || !bounds_panel(layout, s, p) || (map.claimed && map.claimed[i]))
+        /* A seam on half 1 that is the image of one on half 0 goes with it (seg_edge_set_make adds the image). */
+        if (s->sketch || !seg_all_cut(layout, s) || !bounds_panel(layout, s, p) || (map.claimed && map.claimed[i]))
             continue;
-        edge_set set;
-        if (!edge_set_make(layout, &map, i, s->edges, s->edge_count, &set)) {
+        seg_edge_set set;
+        if (!seg_edge_set_make(layout, &map, i, s->edges, s->edge_count, &set)) {
             status = nomem(ctx);
             break;
         }
@@ -1055,7 +1077,7 @@ static pz_status best_merge(seg_layout *layout, int32_t p, edge_set *best, pz_ct
         if (!status)
             status = seg_label_panels(layout, ctx);
     }
-    mirror_map_free(&map);
+    seg_mirror_map_free(&map);
     seg_segments_clear(&segments);
     return status;
 }
@@ -1086,7 +1108,7 @@ pz_status seg_merge_slivers(seg_layout *layout, int32_t *merged, pz_ctx *ctx)
         int32_t p = next_sliver(layout, given_up);
         if (p < 0)
             break;
-        edge_set best;
+        seg_edge_set best;
         if ((status = best_merge(layout, p, &best, ctx)))
             break;
         if (!best.edges) {
@@ -1094,7 +1116,7 @@ pz_status seg_merge_slivers(seg_layout *layout, int32_t *merged, pz_ctx *ctx)
                 given_up[layout->panel_faces[i]] = 1;
             continue;
         }
-        edge_set_apply(layout, &best, 0);
+        seg_edge_set_apply(layout, &best, 0);
         free(best.edges);
         ++*merged;
         seg_progress(layout, "merge slivers", ctx);

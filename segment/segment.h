@@ -268,8 +268,15 @@ typedef struct pz_segment_options {
      * layout has at least as many. panelize run passes the final cuts of its looser goals here
      * (docs/segment.md, "Monotone panel counts"). */
     const uint8_t *seed_cuts;
-    /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts"), called after
-     * each insertion, removal and dart with the current panel count and the worst strain among the
+    /* The piece budget (0: none): at most this many panels (mirror pairs count as two), with the least
+     * strain. The layout is made as usual but for the seams beyond the garment's structure once the budget
+     * is reached, then merged down one seam segment at a time, each time the removal that leaves the least
+     * worst strain among those that keep every panel a disk flattening injectively; corners and S no
+     * longer stop a merge (result->budget_met: reached; docs/segment.md, "A piece budget and the
+     * trade-off"). */
+    int32_t max_pieces;
+    /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts", "budget"), called after
+     * each insertion, removal, dart and budget merge with the current panel count and the worst strain among the
      * current panels that have been flattened (0 when none has). The context's progress callback
      * (pz_ctx.progress) is called at the same steps, with the fraction done. */
     void (*on_progress)(void *user, const char *stage, int32_t panel_count, double worst_strain);
@@ -332,11 +339,16 @@ typedef struct pz_segment_result {
     char reasons[512];           /* when not: "panel 3: strain 0.071 > 0.05; ..." (truncated) */
     pz_symmetry symmetry;        /* the plane used (found = 0: none) */
     double symmetry_residual_mm; /* RMS distance between the layout's cut edges and their mirror images */
+    int32_t max_pieces;          /* options.max_pieces (0: no budget) */
+    int budget_met;              /* 1 when the panels are at most max_pieces (1 without a budget) */
+    int32_t budget_merges;       /* seam segments removed to meet the budget */
+    int32_t budget_unmirrored;   /* of them, removed without their mirror image (no mirrored merge was left):
+                                    the layout is then no longer symmetric (docs/segment.md) */
     /* Counters and timings. */
     int32_t candidate_count, inserted_count, removed_count, evaluation_count;
     int32_t merged_slivers;      /* seams removed at the end to merge a piece under the shape goals into a
                                     neighbour (that may then miss S: a sliver is never the answer to S) */
-    double graph_ms, candidates_ms, insert_ms, remove_ms, darts_ms, total_ms;
+    double graph_ms, candidates_ms, insert_ms, remove_ms, darts_ms, budget_ms, total_ms;
 } pz_segment_result;
 
 /**
@@ -364,6 +376,29 @@ typedef struct pz_segment_result {
 pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_field *field,
                      const pz_segment_options *options, pz_segment_result **out, pz_ctx *ctx);
 void pz_segment_result_free(pz_segment_result **result);
+
+/** The merge sequence of a layout (pz_segment_merge_sequence): the trade-off between pieces and strain. */
+#define PZ_TRADEOFF_STEPS 64
+typedef struct pz_segment_tradeoff {
+    int32_t count;                            /* steps recorded; [0] is the layout as given */
+    int32_t pieces[PZ_TRADEOFF_STEPS];        /* panels after each step (decreasing) */
+    double worst_strain[PZ_TRADEOFF_STEPS];   /* the worst strain of the segmentation's evaluations there */
+    double ms;                                /* the time it took */
+} pz_segment_tradeoff;
+
+/**
+ * The trade-off curve of a layout (docs/segment.md, "A piece budget and the trade-off"): from the layout
+ * of `edge_cut` (flags over the topology's edges, e.g. a pz_segment_result's), merges panels one seam
+ * segment at a time as the piece budget does (the merge leaving the least worst strain; corners no longer
+ * count), recording the panel count and the worst strain after each, until one panel is left, no merge
+ * keeps every panel a disk flattening injectively, or the worst strain exceeds stop_strain. Uses the
+ * options' goals (S, grain, poses through the mesh), symmetry and threads; options->seed_cuts are never
+ * removed (pass the sketched seams). The mesh is not changed. Errors: PZ_ERR_USAGE, PZ_ERR_NOMEM,
+ * PZ_ERR_CANCELLED.
+ */
+pz_status pz_segment_merge_sequence(const pz_mesh *mesh, const pz_topology *topology,
+                                    const pz_segment_options *options, const uint8_t *edge_cut, double stop_strain,
+                                    pz_segment_tradeoff *out, pz_ctx *ctx);
 
 /* ------------------------------------------------------------------------ */
 /* Seam truing                                                               */

@@ -497,7 +497,9 @@ static void test_piece_names(void)
     CHECK(!result->panel_names, "pz_flatten named the pieces");
     pz_result_free(&result);
     free(face_panel);
-    double strains[2] = {0.05, 0.03};
+    /* At S = 0.06 the bodice's mirrored layout is kept (a back crossed by the plane, a front pair); at 0.05 the
+     * joint flattening rejects it and the plane is dropped (docs/segment.md, "Symmetry"). */
+    double strains[2] = {0.06, 0.03};
     int32_t pairs = 0;
     for (int i = 0; i < 2; ++i) {
         pz_run_options_default(&options);
