@@ -295,23 +295,23 @@ static pz_status read_manifest(garments *list, const char *manifest, pz_ctx *ctx
         snprintf(where, sizeof where, "%s:%d", manifest, number);
         size_t length = strlen(line);
         if (length > MAX_LINE && line[length - 1] != '\n') {
-            status = pz_error(ctx, PZ_ERR_DATA, "batch: %s: line longer than %d bytes", where, MAX_LINE);
+            status = pz_error(ctx, PZ_ERR_USAGE, "batch: %s: line longer than %d bytes", where, MAX_LINE);
             break;
         }
         int count = tokenize(line, tokens);
         if (count < 0) {
-            status = pz_error(ctx, PZ_ERR_DATA, "batch: %s: unclosed quote or more than %d words", where, MAX_TOKENS);
+            status = pz_error(ctx, PZ_ERR_USAGE, "batch: %s: unclosed quote or more than %d words", where, MAX_TOKENS);
             break;
         }
         if (count == 0)
             continue;
         if (tokens[0][0] == '-') {
-            status = pz_error(ctx, PZ_ERR_DATA, "batch: %s: the line must start with the garment's file, not '%s'",
+            status = pz_error(ctx, PZ_ERR_USAGE, "batch: %s: the line must start with the garment's file, not '%s'",
                               where, tokens[0]);
             break;
         }
         if (!is_mesh(tokens[0])) {
-            status = pz_error(ctx, PZ_ERR_DATA, "batch: %s: '%s' is not a mesh file (.obj .ply .off .glb .gltf)",
+            status = pz_error(ctx, PZ_ERR_USAGE, "batch: %s: '%s' is not a mesh file (.obj .ply .off .glb .gltf)",
                               where, tokens[0]);
             break;
         }
@@ -358,7 +358,7 @@ static pz_status read_input(garments *list, const char *input, pz_ctx *ctx)
         int32_t before = list->count;
         pz_status status = search(list, input, "", 0, ctx);
         if (status == PZ_OK && list->count == before)
-            return pz_error(ctx, PZ_ERR_DATA, "batch: %s: no garment in the folder (.obj .ply .off .glb .gltf)",
+            return pz_error(ctx, PZ_ERR_USAGE, "batch: %s: no garment in the folder (.obj .ply .off .glb .gltf)",
                             input);
         return status;
     }
