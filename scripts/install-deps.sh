@@ -18,6 +18,7 @@ packages=(
   # run under /usr/bin/python3 and need these; nothing panelize builds or tests links them.
   python3-numpy python3-scipy python3-matplotlib
   clang libclang-rt-14-dev  # libFuzzer targets
+  slurm-wlm munge         # tests/batch/test_batch_slurm.sh runs a batch as a Slurm job array (docs/batch.md)
 )
 
 missing=()
