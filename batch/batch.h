@@ -100,7 +100,7 @@ typedef struct pz_batch_options {
     int resume;              /* 1: a garment whose folder holds its marker (batch.json, status ok) is not run again */
     int strict;              /* 1: a pattern that misses its goals is a failure (category "goals") */
     int32_t shard_index;     /* run garments with order % shard_count == shard_index */
-    int32_t shard_count;     /* 0 or 1: no sharding (summary.csv); else summary-I-of-N.csv */
+    int32_t shard_count;     /* 0: no sharding (summary.csv); N >= 1: shard I of N (summary-I-of-N.csv) */
     int progress;            /* 1: one updating line on stderr (a terminal); 0: a note per garment (ctx->quiet: none) */
     pz_batch_work_fn work;   /* required */
     void *user;              /* passed to work */

@@ -34,7 +34,8 @@ void bt_count_rows(cJSON *const *rows, int32_t count, pz_batch_totals *totals);
 /* Writes one row as the garment folder's marker (atomically: temporary, sync, rename). */
 pz_status bt_write_marker(const char *folder, const cJSON *row, pz_ctx *ctx);
 
-/* The marker's row when `folder` holds a marker whose status is "ok" (the caller deletes it); else NULL. */
-cJSON *bt_read_marker(const char *folder);
+/* The marker's row when `folder` holds a marker of garment `name` whose status is "ok" (the caller deletes
+ * it); else NULL (no marker, another garment's, or not a row). */
+cJSON *bt_read_marker(const char *folder, const char *name);
 
 #endif /* PZ_BATCH_INTERNAL_H */

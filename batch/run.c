@@ -346,7 +346,7 @@ static pz_status select_garments(batch *b, pz_ctx *ctx)
             free(folder);
             return pz_error(ctx, PZ_ERR_NOMEM, "batch: out of memory");
         }
-        cJSON *row = o->resume ? bt_read_marker(folder) : NULL;
+        cJSON *row = o->resume ? bt_read_marker(folder, b->list->garments[b->selected[slot]].name) : NULL;
         if (row) {
             cJSON_ReplaceItemInObjectCaseSensitive(row, "resumed", cJSON_CreateTrue());
             b->rows[slot] = row;

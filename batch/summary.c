@@ -195,14 +195,16 @@ static char *read_small_file(const char *path, long limit)
     return text;
 }
 
-cJSON *bt_read_marker(const char *folder)
+cJSON *bt_read_marker(const char *folder, const char *name)
 {
     char *path = bt_join(folder, BT_MARKER_NAME);
     char *text = path ? read_small_file(path, MAX_ROW) : NULL;
     cJSON *row = text ? cJSON_Parse(text) : NULL;
     free(path), free(text);
     const cJSON *status = cJSON_GetObjectItemCaseSensitive(row, "status");
-    if (!cJSON_IsObject(row) || !cJSON_IsString(status) || strcmp(status->valuestring, "ok") != 0) {
+    const cJSON *own_name = cJSON_GetObjectItemCaseSensitive(row, "name");
+    if (!cJSON_IsObject(row) || !cJSON_IsString(status) || strcmp(status->valuestring, "ok") != 0 ||
+        !cJSON_IsString(own_name) || strcmp(own_name->valuestring, name) != 0) {
         cJSON_Delete(row);
         return NULL;
     }
