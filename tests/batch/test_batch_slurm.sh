@@ -4,7 +4,8 @@
 # free ports, no cgroups: proctrack/linuxproc, task/none), submits the documented job script
 # examples/slurm/panelize-array.sbatch as a 3-task array over 12 generated garments (one broken
 # on purpose) and the merge as a job depending on it, waits, checks every garment's folder, each
-# shard's summary and the merged one, and stops the daemons. Skips (exit 77, saying why) where
+# shard's summary and the merged one, and stops the daemons. Every wait is bounded (a port taken
+# meanwhile: other ports, up to three tries). Skips (exit 77, saying why) where
 # Slurm or munge is not installed (scripts/install-deps.sh installs them), without root, or where
 # the daemons do not start.
 #
@@ -32,7 +33,7 @@ S=$WORK/slurm
 mkdir -p "$S/munge" "$S/state" "$S/spool"
 chmod 700 "$S/munge"
 stop_daemons() {
-    [ -f "$S/slurm.conf" ] && SLURM_CONF=$S/slurm.conf scontrol shutdown >/dev/null 2>&1
+    [ -f "$S/slurm.conf" ] && SLURM_CONF=$S/slurm.conf timeout 10 scontrol shutdown >/dev/null 2>&1
     local pid_file pid
     for pid_file in "$S/slurmctld.pid" "$S/slurmd.pid" "$S/munge/munged.pid"; do
         [ -f "$pid_file" ] || continue
@@ -58,20 +59,36 @@ munged --force --key-file="$S/munge/munge.key" --socket="$S/munge/munge.sock" --
     --log-file="$S/munge/munged.log" --seed-file="$S/munge/munged.seed" >/dev/null 2>&1 ||
     skip_daemons "munged does not start here"
 
-read -r port_ctld port_d < <(python3 -c '
-import socket
-sockets = [socket.socket() for _ in range(2)]
-for s in sockets:
-    s.bind(("127.0.0.1", 0))
-print(*[s.getsockname()[1] for s in sockets])')
-node=$(hostname -s)
-cat >"$S/slurm.conf" <<EOF
+# Every Slurm client call is bounded: against a controller that is not there, one retries for minutes.
+slurm() { timeout 10 "$@"; }
+alive() { [ -f "$1" ] && kill -0 "$(cat "$1")" 2>/dev/null; }
+
+# write_conf: slurm.conf with two ports below the ephemeral range (32768-60999), free right now.
+write_conf() {
+    local node ports
+    ports=$(python3 -c '
+import random, socket
+ports = []
+while len(ports) < 2:
+    port = random.randrange(20000, 30000)
+    s = socket.socket()
+    try:
+        s.bind(("", port))
+        ports.append(port)
+    except OSError:
+        pass
+    finally:
+        s.close()
+print(*ports)')
+    node=$(hostname -s)
+    cat >"$S/slurm.conf" <<EOF
 ClusterName=pztest
 SlurmctldHost=$node(127.0.0.1)
 SlurmUser=root
 SlurmdUser=root
-SlurmctldPort=$port_ctld
-SlurmdPort=$port_d
+SlurmctldPort=${ports% *}
+SlurmdPort=${ports#* }
+MessageTimeout=5
 AuthType=auth/munge
 AuthInfo=socket=$S/munge/munge.sock
 CredType=cred/munge
@@ -95,29 +112,55 @@ SwitchType=switch/none
 NodeName=$node NodeAddr=127.0.0.1 CPUs=$(nproc) State=UNKNOWN
 PartitionName=pz Nodes=ALL Default=YES MaxTime=INFINITE State=UP
 EOF
+}
+
+# start_slurm: slurmctld answering and the node idle within 30 s, else 1.
+start_slurm() {
+    local deadline=$((SECONDS + 30))
+    slurmctld -f "$SLURM_CONF" >/dev/null 2>&1 || return 1
+    until slurm scontrol ping 2>/dev/null | grep -q UP; do
+        alive "$S/slurmctld.pid" && [ $SECONDS -lt $deadline ] || return 1
+        sleep 0.2
+    done
+    slurmd -f "$SLURM_CONF" >/dev/null 2>&1 || return 1
+    until [ "$(slurm sinfo -h -o %T 2>/dev/null)" = idle ]; do
+        alive "$S/slurmctld.pid" && alive "$S/slurmd.pid" && [ $SECONDS -lt $deadline ] || return 1
+        sleep 0.2
+    done
+}
+
 export SLURM_CONF=$S/slurm.conf
-slurmctld -f "$SLURM_CONF" >/dev/null 2>&1 || skip_daemons "slurmctld does not start here"
-slurmd -f "$SLURM_CONF" >/dev/null 2>&1 || skip_daemons "slurmd does not start here"
-for ((t = 0; t < 300; ++t)); do # the node idle: at most 30 s
-    [ "$(sinfo -h -o %T 2>/dev/null)" = idle ] && break
-    sleep 0.1
+started=0
+for attempt in 1 2 3; do # a port taken between the choice and the bind: other ports, again
+    write_conf
+    if start_slurm; then
+        started=1
+        break
+    fi
+    slurm scontrol shutdown >/dev/null 2>&1
+    for pid_file in "$S/slurmctld.pid" "$S/slurmd.pid"; do
+        alive "$pid_file" && kill -KILL "$(cat "$pid_file")"
+        rm -f "$pid_file"
+    done
+    rm -rf "$S/state" "$S/spool" && mkdir -p "$S/state" "$S/spool"
 done
-[ "$(sinfo -h -o %T 2>/dev/null)" = idle ] || skip_daemons "the Slurm node did not come up ($(sinfo -h -o %T 2>&1))"
+[ $started -eq 1 ] || skip_daemons "slurmctld and slurmd did not come up (3 tries of 30 s)"
 
 # ------------------------------------------------------------------ the array and the merge
 check "generate the garments" make_garments "$WORK/in" 11 broken
 export PANELIZE=$BIN
-array=$(sbatch --parsable --array=0-2 --chdir="$WORK" --output="$WORK/task-%a.log" \
+array=$(slurm sbatch --parsable --array=0-2 --chdir="$WORK" --output="$WORK/task-%a.log" \
     "$SOURCE_DIR/examples/slurm/panelize-array.sbatch" "$WORK/in" "$WORK/res" --outputs json,svg)
 check "sbatch the array: '$array'" [ -n "$array" ]
-merge=$(sbatch --parsable --dependency=afterany:"$array" --chdir="$WORK" --output="$WORK/merge.log" \
+merge=$(slurm sbatch --parsable --dependency=afterany:"$array" --chdir="$WORK" --output="$WORK/merge.log" \
     --wrap "\"$BIN\" batch --merge \"$WORK/res\"")
 check "sbatch the merge: '$merge'" [ -n "$merge" ]
-for ((t = 0; t < 1800; ++t)); do # every job done: at most 3 minutes
-    [ -z "$(squeue -h 2>/dev/null)" ] && break
-    sleep 0.1
+deadline=$((SECONDS + 180))
+until queue=$(slurm squeue -h 2>&1) && [ -z "$queue" ]; do # every job done: at most 3 minutes
+    [ $SECONDS -lt $deadline ] || break
+    sleep 0.2
 done
-check "every job ended within 3 minutes: $(squeue -h 2>&1)" [ -z "$(squeue -h 2>/dev/null)" ]
+check "every job ended within 3 minutes: $queue" [ -z "$queue" ]
 
 names="broken g00 g01 g02 g03 g04 g05 g06 g07 g08 g09 g10"
 rows() { python3 -c 'import json,sys; print(" ".join(json.loads(l)["name"] for l in open(sys.argv[1])))' "$1"; }
