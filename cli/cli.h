@@ -76,6 +76,15 @@
 #define PZ_CLI_OPT_STRICT (UINT64_C(1) << 45) /* --strict (run; a flag: stored as the value "1") */
 #define PZ_CLI_OPT_FOLD (UINT64_C(1) << 46) /* --fold (run; a flag: stored as the value "1") */
 #define PZ_CLI_OPT_MAX_PIECES (UINT64_C(1) << 47) /* --max-pieces N (run) */
+#define PZ_CLI_OPT_JOBS (UINT64_C(1) << 48) /* --jobs N (batch) */
+#define PZ_CLI_OPT_SHARD (UINT64_C(1) << 49) /* --shard I/N (batch) */
+#define PZ_CLI_OPT_RESUME (UINT64_C(1) << 50) /* --resume (batch; a flag) */
+#define PZ_CLI_OPT_TIMEOUT (UINT64_C(1) << 51) /* --timeout S (batch) */
+#define PZ_CLI_OPT_MERGE (UINT64_C(1) << 52) /* --merge (batch; a flag) */
+
+/* `batch`: the batch ran, but one garment or more failed (summary.csv says which and why): exit 1. */
+#define PZ_CLI_BATCH_FAILED ((pz_status)1)
+#define PZ_CLI_EXIT_BATCH_FAILED 1
 
 /* A command's outcome besides the pz_status codes (main.c maps it to its exit code, docs/cli.md): `run
  * --strict` wrote its files but the pattern misses its goals. */
@@ -84,7 +93,7 @@
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 39
+#define PZ_CLI_VALUE_COUNT 44 /* up to bit 52 (--merge) */
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;
@@ -98,6 +107,21 @@ static inline int pz_cli_value_index(uint64_t flag)
     (PZ_CLI_OPT_SEAM_ALLOWANCE | PZ_CLI_OPT_HEM_ALLOWANCE | PZ_CLI_OPT_ALLOWANCES | PZ_CLI_OPT_NOTCH_SPACING | \
      PZ_CLI_OPT_PAPER | PZ_CLI_OPT_FABRIC_WIDTH | PZ_CLI_OPT_GAP | PZ_CLI_OPT_DXF_STRICT | PZ_CLI_OPT_SIZE |      \
      PZ_CLI_OPT_OUTPUTS)
+
+/** The options of `run` (the command table in main.c; `batch` takes them too, but --panels and --pose). */
+#define PZ_CLI_OPT_RUN                                                                                           \
+    (PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |            \
+     PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |      \
+     PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |       \
+     PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |                 \
+     PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_MIN_PIECE_WIDTH |       \
+     PZ_CLI_OPT_MIN_PIECE_AREA | PZ_CLI_OPT_MIN_DART_INTAKE | PZ_CLI_OPT_STRICT | PZ_CLI_OPT_FOLD |             \
+     PZ_CLI_OPT_MAX_PIECES | PZ_CLI_OPT_EXPORT)
+
+/** The options of `batch`: run's, but --panels and --pose (per garment: a manifest's), and its own. */
+#define PZ_CLI_OPT_BATCH                                                                                         \
+    ((PZ_CLI_OPT_RUN & ~(PZ_CLI_OPT_PANELS | PZ_CLI_OPT_POSE)) | PZ_CLI_OPT_JOBS | PZ_CLI_OPT_SHARD |           \
+     PZ_CLI_OPT_RESUME | PZ_CLI_OPT_TIMEOUT | PZ_CLI_OPT_MERGE)
 
 /** Options every command takes. */
 #define PZ_CLI_OPT_COMMON (PZ_CLI_OPT_QUIET | PZ_CLI_OPT_JSON)
@@ -148,6 +172,8 @@ pz_status pz_cli_flatten(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_flatten
 pz_status pz_cli_field(const pz_cli_args *args, pz_ctx *ctx);     /* cmd_field.c */
 pz_status pz_cli_prepare(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_prepare.c */
 pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx);       /* cmd_run.c */
+pz_status pz_cli_batch(const pz_cli_args *args, pz_ctx *ctx);     /* cmd_batch.c */
+extern const char pz_cli_batch_usage[];
 extern const char pz_cli_run_usage[];
 extern const char pz_cli_prepare_usage[];
 extern const char pz_cli_flatten_usage[];
@@ -157,6 +183,16 @@ extern const char pz_cli_check_usage[];
 extern const char pz_cli_generate_usage[];
 
 /* ---------------------------------------------------------------- helpers (main.c) */
+
+/**
+ * Parses argv[first .. argc-1] as options of `command_name` accepting the
+ * `accepted` PZ_CLI_OPT_* bits (the parser of every command; `batch` uses it
+ * for a manifest line's options). On failure *args is cleared; on success the
+ * caller frees it with pz_cli_args_clear. Strings point into argv.
+ */
+pz_status pz_cli_parse_args(const char *command_name, uint64_t accepted, int argc, char **argv, int first,
+                            pz_cli_args *args, pz_ctx *ctx);
+void pz_cli_args_clear(pz_cli_args *args);
 
 /**
  * Requires exactly `count` positional arguments; otherwise PZ_ERR_USAGE
@@ -205,6 +241,13 @@ pz_status pz_cli_pipeline_options(const pz_cli_args *args, pz_run_options *optio
  * receives where each file's vertices start. The mesh is in its files' units.
  */
 pz_status pz_cli_read_meshes(const pz_cli_args *args, pz_mesh **mesh, int32_t *file_vertex_offset, pz_ctx *ctx);
+
+/**
+ * Every option of `run` from args into *options (pz_cli_pipeline_options,
+ * then the goals, symmetry, darts, preparation, truing, sketch), messages
+ * naming `run`. PZ_ERR_USAGE naming the option; no file is read.
+ */
+pz_status pz_cli_run_options(const pz_cli_args *args, pz_run_options *options, pz_ctx *ctx);
 
 /** The files to write: --outputs, or all. */
 pz_status pz_cli_outputs(const pz_cli_args *args, unsigned *outputs, pz_ctx *ctx);

@@ -257,16 +257,22 @@ static void rename_message(pz_ctx *ctx)
     snprintf(ctx->error, sizeof ctx->error, "run: %.*s", (int)(sizeof message - 16), message);
 }
 
+pz_status pz_cli_run_options(const pz_cli_args *args, pz_run_options *options, pz_ctx *ctx)
+{
+    pz_status status = pz_cli_pipeline_options(args, options, ctx);
+    if (status == PZ_OK)
+        status = parse_run_options(args, options, ctx);
+    if (status != PZ_OK)
+        rename_message(ctx);
+    return status;
+}
+
 pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx)
 {
     pz_run_options options;
-    pz_status status = pz_cli_pipeline_options(args, &options, ctx);
-    if (status == PZ_OK)
-        status = parse_run_options(args, &options, ctx);
-    if (status != PZ_OK) {
-        rename_message(ctx);
+    pz_status status = pz_cli_run_options(args, &options, ctx);
+    if (status != PZ_OK)
         return status;
-    }
     double start = pz_seconds();
     pz_mesh *mesh = NULL;
     pz_panels panels;

@@ -46,15 +46,9 @@ static const pz_cli_command command_table[] = {
          PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES | PZ_CLI_OPT_EXPORT,
      pz_cli_flatten},
     {"run", "the whole pipeline: garment in, panels, darts and a sewable pattern out",
-     pz_cli_run_usage,
-     PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
-         PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |
-         PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME | PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES |
-         PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |
-         PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_MIN_PIECE_WIDTH |
-         PZ_CLI_OPT_MIN_PIECE_AREA | PZ_CLI_OPT_MIN_DART_INTAKE | PZ_CLI_OPT_STRICT | PZ_CLI_OPT_FOLD |
-         PZ_CLI_OPT_MAX_PIECES | PZ_CLI_OPT_EXPORT,
-     pz_cli_run},
+     pz_cli_run_usage, PZ_CLI_OPT_RUN, pz_cli_run},
+    {"batch", "run many garments: folders, manifests, shards, resume, a summary",
+     pz_cli_batch_usage, PZ_CLI_OPT_BATCH, pz_cli_batch},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
@@ -124,6 +118,11 @@ static const option_spec option_table[] = {
     {"strict", 0, PZ_CLI_OPT_STRICT, 0},
     {"fold", 0, PZ_CLI_OPT_FOLD, 0},
     {"max-pieces", 0, PZ_CLI_OPT_MAX_PIECES, 1},
+    {"jobs", 'j', PZ_CLI_OPT_JOBS, 1},
+    {"shard", 0, PZ_CLI_OPT_SHARD, 1},
+    {"resume", 0, PZ_CLI_OPT_RESUME, 0},
+    {"timeout", 0, PZ_CLI_OPT_TIMEOUT, 1},
+    {"merge", 0, PZ_CLI_OPT_MERGE, 0},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 
@@ -272,7 +271,7 @@ static pz_status parse_option(pz_cli_args *args, uint64_t accepted, int argc, ch
     return apply_option(args, spec, value, ctx);
 }
 
-static void clear_args(pz_cli_args *args)
+void pz_cli_args_clear(pz_cli_args *args)
 {
     free(args->pose_paths);
     free(args->seam_paths);
@@ -281,12 +280,11 @@ static void clear_args(pz_cli_args *args)
     memset(args, 0, sizeof *args);
 }
 
-/* Parses argv[first..argc-1] for `command`; on failure args is cleared. */
-static pz_status parse_args(const pz_cli_command *command, int argc, char **argv, int first, pz_cli_args *args,
-                            pz_ctx *ctx)
+pz_status pz_cli_parse_args(const char *command_name, uint64_t accepted, int argc, char **argv, int first,
+                            pz_cli_args *args, pz_ctx *ctx)
 {
     memset(args, 0, sizeof *args);
-    args->command = command->name;
+    args->command = command_name;
     args->units = PZ_UNITS_AUTO;
     /* Every argument is at most one pose path or one positional: argc bounds both arrays. */
     args->pose_paths = calloc((size_t)argc + 1, sizeof *args->pose_paths);
@@ -294,8 +292,8 @@ static pz_status parse_args(const pz_cli_command *command, int argc, char **argv
     args->seam_paths = calloc((size_t)argc + 1, sizeof *args->seam_paths);
     args->dart_paths = calloc((size_t)argc + 1, sizeof *args->dart_paths);
     if (!args->pose_paths || !args->positionals || !args->seam_paths || !args->dart_paths) {
-        clear_args(args);
-        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", command->name);
+        pz_cli_args_clear(args);
+        return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", command_name);
     }
     int options_ended = 0;
     for (int i = first; i < argc; ++i) {
@@ -303,9 +301,9 @@ static pz_status parse_args(const pz_cli_command *command, int argc, char **argv
         if (!options_ended && strcmp(arg, "--") == 0) {
             options_ended = 1;
         } else if (!options_ended && arg[0] == '-' && arg[1] != '\0') {
-            pz_status status = parse_option(args, command->options, argc, argv, &i, ctx);
+            pz_status status = parse_option(args, accepted, argc, argv, &i, ctx);
             if (status != PZ_OK) {
-                clear_args(args);
+                pz_cli_args_clear(args);
                 return status;
             }
         } else {
@@ -409,11 +407,11 @@ static int run_command(const pz_cli_command *command, int argc, char **argv, pz_
         return 0;
     }
     pz_cli_args args;
-    pz_status status = parse_args(command, argc, argv, 2, &args, ctx);
+    pz_status status = pz_cli_parse_args(command->name, command->options, argc, argv, 2, &args, ctx);
     if (status == PZ_OK) {
         ctx->quiet = args.quiet;
         status = command->run(&args, ctx);
-        clear_args(&args);
+        pz_cli_args_clear(&args);
     }
     if (status != PZ_OK) {
         if (!ctx->error[0])
@@ -421,10 +419,12 @@ static int run_command(const pz_cli_command *command, int argc, char **argv, pz_
         fprintf(stderr, "panelize: %s\n", ctx->error);
     }
     /* A result that could not reach stdout (a full disk, a closed pipe) is a failed run. */
-    if (fflush(stdout) != 0 && (status == PZ_OK || status == PZ_CLI_GOALS_NOT_MET)) {
+    if (fflush(stdout) != 0 && (status == PZ_OK || status == PZ_CLI_GOALS_NOT_MET || status == PZ_CLI_BATCH_FAILED)) {
         fprintf(stderr, "panelize: %s: cannot write to standard output\n", command->name);
         return pz_status_exit_code(PZ_ERR_CREATE);
     }
+    if (status == PZ_CLI_BATCH_FAILED)
+        return PZ_CLI_EXIT_BATCH_FAILED;
     return status == PZ_CLI_GOALS_NOT_MET ? PZ_CLI_EXIT_GOALS_NOT_MET : pz_status_exit_code(status);
 }
 

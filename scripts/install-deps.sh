@@ -22,6 +22,7 @@ packages=(
   python3-dev python3-pytest python3-distributed
   libeigen3-dev           # only bench_peer's libigl peer (cmake --build build --target igl_peer) includes it
   clang libclang-rt-14-dev  # libFuzzer targets
+  slurm-wlm munge         # tests/batch/test_batch_slurm.sh runs a batch as a Slurm job array (docs/batch.md)
 )
 
 missing=()
