@@ -108,7 +108,7 @@ static inline int pz_cli_value_index(uint64_t flag)
      PZ_CLI_OPT_PAPER | PZ_CLI_OPT_FABRIC_WIDTH | PZ_CLI_OPT_GAP | PZ_CLI_OPT_DXF_STRICT | PZ_CLI_OPT_SIZE |      \
      PZ_CLI_OPT_OUTPUTS)
 
-/** The options of `run` (the command table in main.c; `batch` takes them too, but --panels and --pose). */
+/** The options of `run` (the command table in main.c; `batch` takes them too, but --pose, and --panels uv only). */
 #define PZ_CLI_OPT_RUN                                                                                           \
     (PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |            \
      PZ_CLI_OPT_PANELS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND | PZ_CLI_OPT_ITERATIONS |      \
@@ -118,9 +118,9 @@ static inline int pz_cli_value_index(uint64_t flag)
      PZ_CLI_OPT_MIN_PIECE_AREA | PZ_CLI_OPT_MIN_DART_INTAKE | PZ_CLI_OPT_STRICT | PZ_CLI_OPT_FOLD |             \
      PZ_CLI_OPT_MAX_PIECES | PZ_CLI_OPT_EXPORT)
 
-/** The options of `batch`: run's, but --panels and --pose (per garment: a manifest's), and its own. */
+/** The options of `batch`: run's (--panels uv only), but --pose (per garment: a manifest's), and its own. */
 #define PZ_CLI_OPT_BATCH                                                                                         \
-    ((PZ_CLI_OPT_RUN & ~(PZ_CLI_OPT_PANELS | PZ_CLI_OPT_POSE)) | PZ_CLI_OPT_JOBS | PZ_CLI_OPT_SHARD |           \
+    ((PZ_CLI_OPT_RUN & ~PZ_CLI_OPT_POSE) | PZ_CLI_OPT_JOBS | PZ_CLI_OPT_SHARD |           \
      PZ_CLI_OPT_RESUME | PZ_CLI_OPT_TIMEOUT | PZ_CLI_OPT_MERGE)
 
 /** Options every command takes. */

@@ -47,8 +47,8 @@ const char pz_cli_batch_usage[] =
     "  --timeout S     kill a garment after S seconds (recorded as timeout)\n"
     "  --merge         join OUTROOT's shard summaries into summary.csv/.jsonl\n"
     "  --strict        a garment whose pattern misses its goals counts as failed\n"
-    "  run's options   see panelize run --help (not --panels; --pose per garment\n"
-    "                  in a manifest)\n"
+    "  run's options   see panelize run --help (--panels uv only; --pose per\n"
+    "                  garment in a manifest)\n"
     "\n"
     "exit: 0 every garment written, 1 one or more failed (see the summary),\n"
     "64/66/73 bad batch input, 130 interrupted (unfinished garments: pending).\n"
@@ -56,7 +56,23 @@ const char pz_cli_batch_usage[] =
     "per garment on stderr. See docs/batch.md (Slurm job arrays).\n";
 
 /* What a manifest line may give (each garment's own options). */
-#define GARMENT_OPTIONS ((PZ_CLI_OPT_RUN | PZ_CLI_OPT_POSE) & ~(PZ_CLI_OPT_PANELS | PZ_CLI_OPT_OUTPUT | PZ_CLI_OPT_COMMON))
+#define GARMENT_OPTIONS ((PZ_CLI_OPT_RUN | PZ_CLI_OPT_POSE) & ~(PZ_CLI_OPT_OUTPUT | PZ_CLI_OPT_COMMON))
+
+/* --panels uv (each garment's own UV islands as its panels: a dataset flattened with its true panels). A
+ * panel file numbers one garment's faces, so it is refused here. */
+static const pz_panels uv_panels = {.source = PZ_PANELS_UV};
+
+static pz_status batch_panels(const pz_cli_args *merged, pz_run_options *options, pz_ctx *ctx)
+{
+    const char *text = pz_cli_value(merged, PZ_CLI_OPT_PANELS);
+    if (!text)
+        return PZ_OK;
+    if (strcmp(text, "uv") != 0)
+        return pz_error(ctx, PZ_ERR_USAGE, "--panels: only 'uv' in a batch (a panel file '%s' numbers one "
+                        "garment's faces: run that garment alone)", text);
+    options->panels = &uv_panels;
+    return PZ_OK;
+}
 
 typedef struct batch_work_context {
     const pz_cli_args *common; /* the batch's command line */
@@ -103,6 +119,8 @@ static pz_status garment_options(const pz_cli_args *common, const pz_batch_garme
     pz_status status = garment_args(common, garment, folder, line, merged, positional, ctx);
     if (status == PZ_OK)
         status = pz_cli_run_options(merged, options, ctx);
+    if (status == PZ_OK)
+        status = batch_panels(merged, options, ctx);
     if (status == PZ_OK)
         status = pz_cli_outputs(merged, outputs, ctx);
     if (status != PZ_OK) {

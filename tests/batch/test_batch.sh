@@ -52,6 +52,22 @@ run batch in/g00.obj in/g01.obj -o out_good "${FAST[@]}"
 expect_ok "batch of good garments"
 check "all good: the totals on stdout" grep -q '^failed: *0$' out
 
+# ------------------------------------------------------------------ --panels uv: each garment's own panels
+# A dataset flattened with its true panels: each garment's UV islands (here: the pieces a first batch
+# wrote into garment.obj) are its panels, as `run --panels uv` takes them.
+run batch in/g00.obj in/g01.obj -o out_uvsrc --outputs obj,json --quiet
+expect_ok "batch writing garment.obj"
+mkdir -p uvin && cp out_uvsrc/g00/garment.obj uvin/a.obj && cp out_uvsrc/g01/garment.obj uvin/b.obj
+run batch uvin -o out_uv --panels uv --outputs json --quiet
+expect_ok "batch --panels uv"
+check "batch --panels uv: a garment not flattened with its own panels" python3 -c '
+import json, sys
+for new, old in (("a", "g00"), ("b", "g01")):
+    d, e = (json.load(open("%s/%s/report.json" % pair)) for pair in (("out_uv", new), ("out_uvsrc", old)))
+    if d["segmentation"]["panels"] != "given" or d["summary"]["panel_count"] != e["summary"]["panel_count"]:
+        sys.exit(1)'
+expect_error 64 "only 'uv'" --absent out_bad -- batch in -o out_bad --panels faces.txt
+
 # ------------------------------------------------------------------ shards and merge
 for i in 0 1 2; do
     run batch in -o out_shards --shard $i/3 "${FAST[@]}"
