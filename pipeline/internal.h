@@ -130,6 +130,9 @@ pz_status pl_segmenter_choose(pl_segmenter *segmenter, pz_mesh *garment, pl_pane
 
 /** The verdict round: 1 accepts the flattening (uv) of the panels last chosen, 0 asks for a new layout. */
 int pl_segmenter_accept(pl_segmenter *segmenter, const pz_pattern *pattern, const double *uv, pz_ctx *ctx);
+/* The strain goal the flattening aims at: the run's S, or the looser S whose layout was written because the
+ * run's could not be met with sound pieces (pipeline/segmentation.c, write_sound_instead). */
+double pl_segmenter_flatten_strain(const pl_segmenter *segmenter, double run_strain);
 
 /** The mirror pieces of the panels last chosen made exact in uv (pl_exact_mirror_pieces), when the layout used a
  * plane. */

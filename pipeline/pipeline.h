@@ -300,6 +300,8 @@ typedef struct pz_result {
     int looser_seeded;
     double looser_reachable_strain;  /* the strictest S among them whose layout met every goal (at the run's C); <= 0: none */
     int32_t looser_reachable_panels; /* that layout's panels */
+    double looser_written_strain;    /* > 0: the run's S was out of reach with sound pieces, and the layout of this
+                                        looser S (the reachable one) is the one written (docs/run.md) */
     pz_strain_outlook outlook;       /* can S be met: taken before the segmentation */
     pz_segment_tradeoff tradeoff;    /* the final layout's merge sequence (count 0: not measured): the pieces each
                                         strain goal needs (pz_tradeoff_pieces; docs/run.md, "The trade-off") */

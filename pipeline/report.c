@@ -613,6 +613,8 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
         if (result->looser_reachable_strain > 0) {
             ok &= add_plain_number(ladder, "reachable_strain", result->looser_reachable_strain);
             ok &= add_plain_number(ladder, "reachable_panels", result->looser_reachable_panels);
+            if (result->looser_written_strain > 0)
+                ok &= add_plain_number(ladder, "written_strain", result->looser_written_strain);
         }
         cJSON *timings = cJSON_AddObjectToObject(ladder, "timings_ms");
         ok &= timings && add_plain_number(timings, "total", pz_round(result->timings.looser_goals, 3));

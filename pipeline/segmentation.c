@@ -95,6 +95,7 @@ struct pl_segmenter {
     ladder_rung *rungs;
     int32_t rung_count, rung_capacity;
     int32_t seed_panels;                /* the most panels among the parent settings */
+    double written_looser_strain;       /* > 0: the run's S was out of reach; the layout of this S is written */
     double ladder_ms;
 };
 
@@ -408,6 +409,61 @@ static pz_status truing_added_corners(const pl_segmenter *seg, const pz_mesh *ga
     return PZ_OK;
 }
 
+/*
+ * The strictest looser setting whose layout met every goal at the run's C
+ * (its S; -1: none) and its panels.
+ */
+static double reachable_strain(const pl_segmenter *seg, int32_t *panels)
+{
+    double best = -1;
+    *panels = 0;
+    for (int32_t i = 0; i < seg->rung_count; ++i) {
+        const ladder_rung *rung = seg->rungs + i;
+        if (rung->goals_met && rung->max_corners == seg->goals.goals.max_corners &&
+            (best < 0 || rung->max_strain < best))
+            best = rung->max_strain, *panels = rung->panels;
+    }
+    return best;
+}
+
+/*
+ * Impossible goals end with the best sound layout (issue 15): when the
+ * run's own layout could not meet its S with sound pieces (slivers merged,
+ * best effort) and a looser S of the ladder could, that setting's layout
+ * replaces it: a few sound pieces a pattern maker can cut, not dozens that
+ * still miss S. It is made again (the ladder keeps only its cuts; its
+ * parents are memoised), judged against the run's own goals by the final
+ * verdict, which names both S.
+ */
+static pz_status write_sound_instead(pl_segmenter *seg, pz_mesh *garment, const pz_topology *topology,
+                                     const pz_sketch *sketch, pz_ctx *ctx)
+{
+    int32_t panels = 0;
+    double strain = reachable_strain(seg, &panels);
+    if (seg->segment->goals_met || !(strain > seg->goals.goals.max_strain))
+        return PZ_OK;
+    goal_setting sound_goals;
+    memset(&sound_goals, 0, sizeof sound_goals);
+    pz_segment_result *sound = NULL;
+    int seeded = 0;
+    int32_t most_panels = 0;
+    pz_status status = solve_setting(seg, garment, topology, sketch, strain, seg->goals.goals.max_corners, &sound_goals,
+                                     &sound, &seeded, &most_panels, ctx);
+    if (status == PZ_OK && sound->goals_met) {
+        pz_note(ctx, "run: S = %g cannot be met with sound pieces (%d panels, best effort); the layout made for "
+                "S = %g (%d panels) is written instead, flattened for that S", seg->goals.goals.max_strain,
+                (int)seg->segment->panel_count, strain, (int)sound->panel_count);
+        pz_segment_result_free(&seg->segment);
+        sound->goals_met = 0; /* not the run's goals: the final verdict judges them */
+        seg->segment = sound;
+        sound = NULL;
+        seg->written_looser_strain = strain;
+    }
+    pz_segment_result_free(&sound);
+    goal_setting_clear(&sound_goals);
+    return status;
+}
+
 pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choice *choice, pz_ctx *ctx)
 {
     seg->garment = garment;
@@ -452,6 +508,8 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         pz_segment_result_free(&seg->segment);
         status = solve_setting(seg, garment, topology, sketch, seg->goals.goals.max_strain, seg->goals.goals.max_corners,
                                &seg->goals, &seg->segment, &seg->seeded, &seg->seed_panels, ctx);
+        if (status == PZ_OK)
+            status = write_sound_instead(seg, garment, topology, sketch, ctx);
         if (status == PZ_OK)
             status = keep_or_restore_original(seg, garment, ctx);
         if (status == PZ_OK)
@@ -849,6 +907,11 @@ static int verdict_check(goal_setting *goals, const pz_mesh *garment, const pz_s
     return 0;
 }
 
+double pl_segmenter_flatten_strain(const pl_segmenter *seg, double run_strain)
+{
+    return seg && seg->written_looser_strain > 0 ? seg->written_looser_strain : run_strain;
+}
+
 int pl_segmenter_accept(pl_segmenter *seg, const pz_pattern *pattern, const double *uv, pz_ctx *ctx)
 {
     if (seg->ladder_done)
@@ -967,14 +1030,10 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->looser_seeded = seg->seeded;
     /* The strictest S of the ladder that its layout met, at the run's C: what the run can promise when its
      * own S cannot be met (the final verdict names it). */
-    result->looser_reachable_strain = -1;
-    result->looser_reachable_panels = 0;
-    for (int32_t i = 0; i < seg->rung_count; ++i) {
-        const ladder_rung *rung = seg->rungs + i;
-        if (rung->goals_met && rung->max_corners == seg->goals.goals.max_corners &&
-            (result->looser_reachable_strain < 0 || rung->max_strain < result->looser_reachable_strain))
-            result->looser_reachable_strain = rung->max_strain, result->looser_reachable_panels = rung->panels;
-    }
+    result->looser_reachable_strain = reachable_strain(seg, &result->looser_reachable_panels);
+    result->looser_written_strain = seg->written_looser_strain;
+    if (seg->written_looser_strain > 0 && result->segment) /* made again: the count of the layout written */
+        result->looser_reachable_panels = result->segment->panel_count;
     result->timings.field = seg->field_ms;
     result->timings.segment = seg->segment_ms;
     result->timings.looser_goals = seg->ladder_ms;

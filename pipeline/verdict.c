@@ -279,7 +279,10 @@ pz_status pl_final_verdict(pz_result *result, int layout_reachable, pz_ctx *ctx)
     /* Where the layout merged slivers, S was given up on purpose: say so (docs/segment.md, "Piece shapes"). */
     int32_t merged = result->segment ? result->segment->merged_slivers : 0;
     char why[512] = "";
-    if (!layout_reachable && merged > 0)
+    if (!layout_reachable && result->looser_written_strain > 0)
+        snprintf(why, sizeof why, " (sound pieces cannot meet it: the layout made for S = %g is written instead of "
+                 "slivers)", result->looser_written_strain);
+    else if (!layout_reachable && merged > 0)
         snprintf(why, sizeof why, " (%d pieces under %g mm or %g %% of the area merged into their neighbours rather "
                  "than cut: a sliver is never the answer to S; best effort written)", (int)merged,
                  goals.min_piece_width_mm, 100 * goals.min_piece_area);

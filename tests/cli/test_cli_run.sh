@@ -336,6 +336,11 @@ report_checks "run --max-strain 0" hemi0 \
 reachable=$(python3 -c "import json; print('%g' % json.load(open('hemi0/report.json'))['segmentation']['looser_goals'].get('reachable_strain', -1))")
 check "run --max-strain 0: the note does not name the reachable S = $reachable: $(grep unreachable "$WORK/err" | tail -c 200)" \
     grep -q "; S = 0 cannot be met here, S = $reachable can ([0-9]* panels)" "$WORK/err"
+# The best sound layout is written (issue 15), not a best effort of slivers: the reachable S's layout.
+report_checks "run --max-strain 0: written layout" hemi0 \
+    "not the layout of the reachable S written: $(grep -o '"looser_goals":[^}]*' hemi0/report.json | head -c 300)" \
+    "d['segmentation']['looser_goals']['written_strain'] == d['segmentation']['looser_goals']['reachable_strain'] and d['summary']['panel_count'] == d['segmentation']['looser_goals']['reachable_panels']"
+check "run --max-strain 0: no note that the reachable layout is written" grep -q "is written instead, flattened for that S" "$WORK/err"
 # Said before the long work, in one line naming an S that would work (docs/run.md, "Can S be met?").
 check "run --max-strain 0: not one 'cannot be met' line before the layout: $(grep -n 'cannot be met\|goals unreachable' "$WORK/err" | head -c 300)" \
     python3 -c 'import re, sys
