@@ -8,6 +8,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "batch/internal.h"
+#include "core/util.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -82,11 +83,7 @@ static void csv_field(FILE *file, const cJSON *value)
         return;
     }
     if (cJSON_IsNumber(value)) {
-        double number = value->valuedouble;
-        if (number == floor(number) && fabs(number) < 1e15)
-            fprintf(file, "%.0f", number);
-        else
-            fprintf(file, "%.6g", number);
+        pz_put_plain_number(file, value->valuedouble);
         return;
     }
     const char *text = cJSON_IsString(value) ? value->valuestring : "";

@@ -7,8 +7,10 @@
 #ifndef PZ_CORE_UTIL_H
 #define PZ_CORE_UTIL_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 
 /*
@@ -35,6 +37,16 @@ static inline int pz_grow(void **data, size_t *capacity, size_t needed, size_t e
     *data = bigger;
     *capacity = grown;
     return 1;
+}
+
+/* A number as a person reads it in a table or a report: whole numbers without a fraction, others with 6
+ * significant digits (summary.csv, report.html). */
+static inline void pz_put_plain_number(FILE *file, double number)
+{
+    if (number == floor(number) && fabs(number) < 1e15)
+        fprintf(file, "%.0f", number);
+    else
+        fprintf(file, "%.6g", number);
 }
 
 /* Union-find over int32 ids with path halving; parent[x] == x marks a root. */

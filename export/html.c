@@ -23,6 +23,7 @@
  */
 #include "export/export.h"
 #include "export/stream_status.h"
+#include "core/util.h"
 #include "export/xml_text.h"
 
 #include <math.h>
@@ -36,11 +37,7 @@ enum { kColourBins = 33 };
 static void put_value(FILE *file, const cJSON *value)
 {
     if (cJSON_IsNumber(value)) {
-        double number = value->valuedouble;
-        if (number == floor(number) && fabs(number) < 1e15)
-            fprintf(file, "%.0f", number);
-        else
-            fprintf(file, "%.6g", number);
+        pz_put_plain_number(file, value->valuedouble);
     } else if (cJSON_IsString(value)) {
         pz_xml_put_text(file, value->valuestring);
     } else if (cJSON_IsBool(value)) {
