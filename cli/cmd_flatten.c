@@ -192,11 +192,8 @@ static pz_status read_correspondences(const pz_cli_args *args, flatten_inputs *i
     pz_correspondences *out = &inputs->correspondences;
     pz_status status = pz_read_correspondences(args->seam_paths, args->seam_path_count, args->dart_paths,
                                                args->dart_path_count, &space, out, ctx);
-    inputs->panels.seams = out->seams;
-    inputs->panels.seam_count = out->seam_count;
-    inputs->panels.darts = out->darts;
-    inputs->panels.dart_count = out->dart_count;
-    inputs->panels.correspondence_name = args->seam_path_count ? args->seam_paths[0] : args->dart_paths[0];
+    pz_panels_use_correspondences(&inputs->panels, out,
+                                  args->seam_path_count ? args->seam_paths[0] : args->dart_paths[0]);
     return status;
 }
 

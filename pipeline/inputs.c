@@ -599,3 +599,12 @@ void pz_mesh_mark_used_vertices(const pz_mesh *mesh, uint8_t *used)
         if (mesh->faces[c] >= 0 && mesh->faces[c] < mesh->vertex_count)
             used[mesh->faces[c]] = 1;
 }
+
+void pz_panels_use_correspondences(pz_panels *panels, const pz_correspondences *read, const char *name)
+{
+    panels->seams = read->seams;
+    panels->seam_count = read->seam_count;
+    panels->darts = read->darts;
+    panels->dart_count = read->dart_count;
+    panels->correspondence_name = name;
+}

@@ -453,6 +453,12 @@ pz_status pz_read_correspondences(const char *const *seam_paths, int seam_count,
                                   int dart_count, const pz_vertex_space *space, pz_correspondences *out,
                                   pz_ctx *ctx);
 
+/**
+ * Points the panels' seams and darts at what pz_read_correspondences read
+ * (still owned by `read`), named after `name` (the first file) in messages.
+ */
+void pz_panels_use_correspondences(pz_panels *panels, const pz_correspondences *read, const char *name);
+
 /** Sets used[v] = 1 for every vertex a face of `mesh` names (used: vertex_count bytes, zeroed by the caller). */
 void pz_mesh_mark_used_vertices(const pz_mesh *mesh, uint8_t *used);
 

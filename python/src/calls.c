@@ -271,11 +271,7 @@ static pz_status read_correspondences(pattern_job *data, pz_ctx *ctx)
     pz_correspondences *out = &data->correspondences;
     pz_status status = pz_read_correspondences(data->seam_paths, data->seam_count, data->dart_paths,
                                                data->dart_count, &space, out, ctx);
-    data->panels.seams = out->seams;
-    data->panels.seam_count = out->seam_count;
-    data->panels.darts = out->darts;
-    data->panels.dart_count = out->dart_count;
-    data->panels.correspondence_name = data->seam_count ? data->seam_paths[0] : data->dart_paths[0];
+    pz_panels_use_correspondences(&data->panels, out, data->seam_count ? data->seam_paths[0] : data->dart_paths[0]);
     return status;
 }
 
