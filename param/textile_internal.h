@@ -6,7 +6,10 @@
  * local/global iteration over all panels at once.
  *
  * Start: LSCM per panel, oriented so the projected grain runs along +v
- * (param/lscm.c). Then, each iteration:
+ * (param/lscm.c); a pattern with seams first iterates with them open, so
+ * the panels reach their own flat shapes before they are sewn (textile_solve.c:
+ * the strain goal's warm-up, open_seams_start without one). Then, each
+ * iteration:
  *
  *  1. Grain alignment: every panel is turned rigidly about its centroid so
  *     the area-weighted projected 3D grain follows +v (the warp; Sec. 4.3

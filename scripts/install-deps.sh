@@ -20,7 +20,7 @@ packages=(
   # The Python package (python/, docs/python.md): built against Debian's Python and numpy C APIs,
   # tested under pytest; python3-distributed runs the Dask example of docs/python.md.
   python3-dev python3-pytest python3-distributed
-  libeigen3-dev           # only bench_peer's libigl peer (cmake --build build --target igl_peer) includes it
+  libeigen3-dev           # only the benchmarks' libigl peers (targets igl_peer, igl_truth_peer) include it
   clang libclang-rt-14-dev  # libFuzzer targets
   slurm-wlm munge         # tests/batch/test_batch_slurm.sh runs a batch as a Slurm job array (docs/batch.md)
 )
