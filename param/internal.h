@@ -46,11 +46,15 @@ void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const in
 /* CHOLMOD's symbolic analysis of a symmetric matrix whose unknown k sits at
  * positions[3 * vertex_of[k]] (vertex_of may be NULL: CHOLMOD's default
  * ordering): nested dissection or AMD, whichever fills less, from 8000
- * unknowns on. The ordering depends on the sparsity pattern and, from 8000
- * unknowns on, the positions: a factor analyzed once serves every matrix of
- * that pattern. Returns the symbolic factor or NULL (common->status says why). */
+ * unknowns on. `refactorized`: the matrix will be factorized many times (the
+ * textile's), so below PZ_METIS_MAX_UNKNOWNS METIS is tried too (a slower
+ * ordering that pays back over the factorizations and solves). The ordering
+ * depends on the sparsity pattern and, from 8000 unknowns on, the positions:
+ * a factor analyzed once serves every matrix of that pattern. Returns the
+ * symbolic factor or NULL (common->status says why). */
+#define PZ_METIS_MAX_UNKNOWNS 50000
 cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions, const int32_t *vertex_of,
-                                 cholmod_common *common);
+                                 int refactorized, cholmod_common *common);
 
 /* cholmod_factorize with no OpenMP team (param/lscm.c says why). */
 int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_common *common);

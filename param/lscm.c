@@ -312,46 +312,68 @@ static int nested_dissection(const int *colp, const int *rows, int32_t n, const 
  * the better (CHOLMOD's pick) of nested_dissection and AMD -- nested
  * dissection wins on smooth meshes (hemisphere, 100K unknowns: 0.91 against
  * 1.42 GFlop), AMD on some irregular ones (the face scan: 0.04 against 0.09)
- * -- else, or when vertex_of is NULL or memory is short, CHOLMOD's default
+ * -- (and METIS too for a `refactorized` matrix below PZ_METIS_MAX_UNKNOWNS)
+ * else, or when vertex_of is NULL or memory is short, CHOLMOD's default
  * (AMD, METIS when that fills badly: its analysis alone took 1.2-1.7 s at
  * 200K faces). Returns the symbolic factor or NULL (common->status says
  * why). Shared with the textile set-up (param/textile_setup.c).
  */
 #define ND_MIN_UNKNOWNS 8000
+/* cholmod_analyze_p trying the orderings listed (CHOLMOD keeps the one that fills least); perm: the
+ * CHOLMOD_GIVEN one, when listed. */
+static cholmod_factor *analyze_with(cholmod_sparse *matrix, int32_t *perm, const int *orderings, int count,
+                                    cholmod_common *common)
+{
+    int nmethods = common->nmethods, saved[3];
+    for (int m = 0; m < count; ++m) {
+        saved[m] = common->method[m].ordering;
+        common->method[m].ordering = orderings[m];
+    }
+    common->nmethods = count;
+    cholmod_factor *factor = cholmod_analyze_p(matrix, perm, NULL, 0, common);
+    common->nmethods = nmethods;
+    for (int m = 0; m < count; ++m)
+        common->method[m].ordering = saved[m];
+    return factor;
+}
+
 cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions, const int32_t *vertex_of,
-                                 cholmod_common *common)
+                                 int refactorized, cholmod_common *common)
 {
     size_t n = matrix->ncol;
+    /* METIS for a matrix factorized many times: on the textile's systems it filled 10-17 % less than
+     * the better of nested_dissection and AMD, with 21-46 % fewer flops (camelhead.off: 35 -> 19
+     * MFlop), but through CHOLMOD it costs two to four of those factorizations (40-80 ms at 11-17K
+     * unknowns), and at 100K unknowns it added 0.8 s to the start-up (docs/param.md, "Speed against
+     * libigl"). */
+    int metis = refactorized && n < PZ_METIS_MAX_UNKNOWNS;
     double *coords = NULL;
     int32_t *perm = NULL;
     if (vertex_of && n >= ND_MIN_UNKNOWNS) {
         coords = malloc(n * 3 * sizeof(double));
         perm = malloc(n * sizeof(int32_t));
     }
-    if (!coords || !perm) {
-        free(coords);
-        free(perm);
-        return cholmod_analyze(matrix, common);
-    }
-    for (size_t k = 0; k < n; ++k)
-        memcpy(coords + 3 * k, positions + 3 * (size_t)vertex_of[k], 3 * sizeof(double));
+    int dissected = 0;
     cholmod_factor *factor = NULL;
-    if (nested_dissection(matrix->p, matrix->i, (int32_t)n, coords, perm)) {
-        /* CHOLMOD keeps the better of the two (AMD wins on some irregular meshes). */
-        int nmethods = common->nmethods, ordering[2] = {common->method[0].ordering, common->method[1].ordering};
-        common->nmethods = 2;
-        common->method[0].ordering = CHOLMOD_GIVEN;
-        common->method[1].ordering = CHOLMOD_AMD;
-        factor = cholmod_analyze_p(matrix, perm, NULL, 0, common);
-        common->nmethods = nmethods;
-        common->method[0].ordering = ordering[0];
-        common->method[1].ordering = ordering[1];
-    } else {
-        factor = cholmod_analyze(matrix, common);
+    if (coords && perm) {
+        for (size_t k = 0; k < n; ++k)
+            memcpy(coords + 3 * k, positions + 3 * (size_t)vertex_of[k], 3 * sizeof(double));
+        dissected = nested_dissection(matrix->p, matrix->i, (int32_t)n, coords, perm);
+        if (dissected) {
+            /* AMD wins on some irregular meshes. */
+            static const int orderings[3] = {CHOLMOD_GIVEN, CHOLMOD_AMD, CHOLMOD_METIS};
+            factor = analyze_with(matrix, perm, orderings, metis ? 3 : 2, common);
+        }
     }
     free(coords);
     free(perm);
-    return factor;
+    if (dissected)
+        return factor;
+    if (metis) {
+        static const int orderings[2] = {CHOLMOD_AMD, CHOLMOD_METIS};
+        return analyze_with(matrix, NULL, orderings, 2, common);
+    }
+    return cholmod_analyze(matrix, common);
 }
 
 /*
@@ -522,7 +544,7 @@ static pz_status lscm_solve(const pz_mesh *disk, const int32_t pins[2], double *
     for (int32_t v = 0; vertex_of && v < nv; ++v)
         if (unknown[v] >= 0)
             vertex_of[unknown[v]] = v;
-    factor = pz_param_analyze(matrix, disk->positions, vertex_of, &common);
+    factor = pz_param_analyze(matrix, disk->positions, vertex_of, 0, &common);
     free(vertex_of);
     if (factor)
         pz_param_factorize(matrix, factor, &common);

@@ -75,6 +75,11 @@ static int grain_response(const panel_system *system, coordinate_solver *solver,
 #define PCG_REDUCTION 1e-1
 #define ONE_STEP_REDUCTION 1e-2 /* the one-step rules' residual reduction (the old rule) */
 #define PCG_EXACT_SLACK 0.2
+/* demand_exact_solves (a stalled line search, textile_solve.c): the next solve runs to this
+ * reduction, with up to one factorization's worth of steps, instead of factorizing both coordinates
+ * (on the 20K hemisphere the retry's two factorizations were a fifth of the iterations' time; the
+ * fresh factor from the last refactorization converges in a few steps). */
+#define PCG_EXACT_REDUCTION 1e-12
 #define ONE_STEP_MIN_VERTICES 50000
 #define PCG_MODEL_TOLERANCE 1e-9
 /* The start of a preconditioned solve: the iterate (uv's column k) gathered into `current`, the
@@ -120,6 +125,11 @@ static int pcg_solve(const panel_system *system, coordinate_solver *solver, chol
     /* Panels of ONE_STEP_MIN_VERTICES take one step, as before: on the 200K hemisphere checking it cost
      * as many solves again for no lower energy (docs/param.md, "Speed against libigl"). */
     int budget = n >= ONE_STEP_MIN_VERTICES ? 1 : solver->max_steps / 2 > 1 ? solver->max_steps / 2 : 1;
+    int exact = solver->exact;
+    double reduction = exact ? PCG_EXACT_REDUCTION : PCG_REDUCTION;
+    solver->exact = 0;
+    if (exact)
+        budget = solver->max_steps;
     int steps = 0;
     double rz = 0, rz_start = 0;
     for (;;) {
@@ -136,7 +146,7 @@ static int pcg_solve(const panel_system *system, coordinate_solver *solver, chol
                 return 0;
             rz_start = rz_new;
         }
-        if (rz_new <= PCG_MODEL_TOLERANCE * scale || rz_new <= PCG_REDUCTION * rz_start || steps == budget)
+        if (rz_new <= PCG_MODEL_TOLERANCE * scale || rz_new <= reduction * rz_start || steps == budget)
             break;
         double beta = steps == 0 ? 0 : rz_new / rz; /* p's old contents are garbage at step 0 (0 * NaN) */
         for (int32_t l = 0; l < n; ++l)
@@ -155,10 +165,12 @@ static int pcg_solve(const panel_system *system, coordinate_solver *solver, chol
         }
         /* alpha is z^T M z / z^T A z: near 1, M is A along the step and it
          * was nearly exact; checking that would cost another solve. */
-        if (++steps == budget || (steps == 1 && fabs(alpha - 1) <= PCG_EXACT_SLACK))
+        if (++steps == budget || (steps == 1 && !exact && fabs(alpha - 1) <= PCG_EXACT_SLACK))
             break;
     }
-    if (budget > 1 ? 4 * steps > solver->max_steps : one_step_stale(r, n, r_norm, solver->max_steps))
+    /* An exact solve that used its whole budget: the factor has gone stale. */
+    if (exact ? steps == budget
+              : budget > 1 ? 4 * steps > solver->max_steps : one_step_stale(r, n, r_norm, solver->max_steps))
         solver->refactor = 1;
     for (int32_t l = 0; l < n; ++l)
         uv[2 * system->vertices[l] + k] = x[l];
@@ -311,7 +323,7 @@ static int solve_coordinate(const textile_state *state, int32_t panel, int k, do
     coordinate_solver *solver = &system->solver[k];
     cholmod_factor *factor = solver->borrowing ? system->solver[0].factor : solver->factor;
     if (solver->fresh) {
-        solver->fresh = 0;
+        solver->fresh = solver->exact = 0; /* a direct solve is exact */
         if (!cholmod_solve2(CHOLMOD_A, factor, solver->rhs, NULL, &solver->solution, NULL, &solver->work_y,
                             &solver->work_e, &solver->common))
             return solver->common.status ? solver->common.status : -1;

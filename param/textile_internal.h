@@ -198,6 +198,7 @@ typedef struct coordinate_solver {
     int fresh;                /* the factor was made from this iteration's matrix: solve directly */
     int failed;               /* this iteration's PCG step failed (global_step solves it directly) */
     int refactor;             /* 1: factorize before the next solve */
+    int exact;                /* 1: the next preconditioned solve runs to PCG_EXACT_REDUCTION (demand_exact_solves) */
     int direct_runs;          /* after PCG failed: factorize and solve directly this many more times */
     int backoff;              /* the next such pause (doubles on repeated failures) */
     double *grain_gradient;   /* the panel's grain_gradient for this coordinate at the last assembly */

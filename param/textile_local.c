@@ -60,7 +60,8 @@ static void face_system(const double c[2][3], const stretch_figures *figures, co
     double row_weight = stretch_weight * clamped;
     /* With poses the row's slope is the mean of the poses' slopes:
      * sum_p s_p (s_p - 1) = P s (s + var / s - 1); var = 0 for one pose. */
-    double target = near ? s[k] + (figures->second[k] - s[k] * s[k]) / s[k] : clamped;
+    double variance = figures->second[k] - s[k] * s[k]; /* 0 with one pose: no division then */
+    double target = near ? (variance != 0 ? s[k] + variance / s[k] : s[k]) : clamped;
     double cross = near ? stretch_weight * figures->slope[o] : 0;
     double cross_weight = near ? stretch_weight * figures->curvature[o] : 0;
     for (int e = 0; e < 6; ++e) {
@@ -94,10 +95,13 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
      * orientation): their stretch rows are dropped for this iteration and the
      * rotation-only rigidity term alone turns them back. */
     int stretch = twice_area > 1e-12 * area_3d && area_3d > 0;
+    /* One division per face: this loop runs once per evaluation over every face, and divisions were
+     * most of its cost (about 28 per face before issue 17). */
+    double inverse_area = stretch ? 1 / twice_area : 0;
     for (int i = 0; i < 3; ++i) {
         int j = (i + 1) % 3, k = (i + 2) % 3;
-        c[0][i] = stretch ? (q[j][1] - q[k][1]) / twice_area : 0;
-        c[1][i] = stretch ? (q[k][0] - q[j][0]) / twice_area : 0;
+        c[0][i] = (q[j][1] - q[k][1]) * inverse_area;
+        c[1][i] = (q[k][0] - q[j][0]) * inverse_area;
     }
     double qe[3][2];
     for (int e = 0; e < 3; ++e) {
@@ -146,8 +150,9 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
         /* The rotation maximizing tr(R^T S), S = sum q_e p_e^T. */
         double cs = s00 + s11, sn = s10 - s01, norm = sqrt(cs * cs + sn * sn);
         if (norm > 0) {
-            cs /= norm;
-            sn /= norm;
+            double inverse_norm = 1 / norm;
+            cs *= inverse_norm;
+            sn *= inverse_norm;
         } else {
             cs = 1;
             sn = 0;
@@ -162,22 +167,25 @@ static double local_face(const textile_state *state, int32_t f, const double *uv
     }
     double energy = 0, stretch_weight = state->w_stretch * area_3d * (state->stretch_boost ? state->stretch_boost[f] : 1);
     double worst_strain = 0;
-    for (int k = 0; k < 2; ++k) {
-        figures.s[k] /= poses;
-        figures.second[k] /= poses;
-        figures.slope[k] /= poses;
-        figures.curvature[k] /= poses;
+    if (poses > 1) /* the means over the poses (one pose: the sums are the means) */
+        for (int k = 0; k < 2; ++k) {
+            figures.s[k] /= poses;
+            figures.second[k] /= poses;
+            figures.slope[k] /= poses;
+            figures.curvature[k] /= poses;
+            stretch_sum[k] /= poses;
+            for (int e = 0; e < 3; ++e)
+                t[e][k] /= poses;
+        }
+    for (int k = 0; k < 2; ++k)
         if (stretch) {
-            energy += stretch_weight * stretch_sum[k] / poses;
+            energy += stretch_weight * stretch_sum[k];
             /* s_k - 1 is the strain |J_k| - 1 of docs/metrics.md (the mean over poses). */
             worst_strain = fmax(worst_strain, fabs(figures.s[k] - 1));
         }
-        for (int e = 0; e < 3; ++e)
-            t[e][k] /= poses;
-    }
     if (state->face_strain)
         state->face_strain[f] = worst_strain;
-    energy += state->w_rigid * rigid_sum / poses;
+    energy += state->w_rigid * (poses > 1 ? rigid_sum / poses : rigid_sum);
     for (int k = 0; k < 2; ++k)
         face_system(c, &figures, t, stretch_weight, state->w_rigid, k, &state->terms[f]);
     state->face_energy[f] = energy;

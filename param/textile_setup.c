@@ -232,7 +232,7 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
             int32_t a = state->vertex_local[ends[0]], b = state->vertex_local[ends[1]];
             system->segment_slots[i] = find_slot(su->matrix, a < b ? a : b, a < b ? b : a);
         }
-        system->symbolic = pz_param_analyze(su->matrix, mesh->positions, system->vertices, &su->common);
+        system->symbolic = pz_param_analyze(su->matrix, mesh->positions, system->vertices, 1, &su->common);
         /* The factorization costs `ratio` PCG steps: CHOLMOD's flop count for
          * the factor against two triangular solves and a product, times
          * FACTOR_FLOP_COST (the flops underestimate it below ~50K unknowns:
@@ -260,7 +260,7 @@ static int panel_begin(panel_system *system)
     int allocated = 1;
     for (int k = 0; k < 2 && allocated; ++k) {
         coordinate_solver *s = &system->solver[k];
-        s->factored = s->fresh = s->failed = s->refactor = s->direct_runs = s->response_ready = 0;
+        s->factored = s->fresh = s->failed = s->refactor = s->exact = s->direct_runs = s->response_ready = 0;
         s->factorizations = s->failed_steps = s->pcg_solves = 0;
         s->backoff = 1;
         s->borrowing = k == 1 && s->max_steps >= BORROW_MIN_STEPS;

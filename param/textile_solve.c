@@ -427,12 +427,19 @@ static int32_t demote_terms(textile_state *state, pz_textile_result *result)
     return demoted;
 }
 
-/* The next global step factorizes every coordinate's own matrix and solves
- * it directly (v stops borrowing u's factor). */
+/* The next global step solves exactly: without a strain goal by conjugate
+ * gradients to PCG_EXACT_REDUCTION (pcg_solve; a factorization only when
+ * that takes more than one factorization's worth of steps); with one, the
+ * one-step solve's way: every coordinate's own matrix factorized and solved
+ * directly (v stops borrowing u's factor). */
 static void demand_exact_solves(textile_state *state)
 {
     for (int32_t p = 0; p < state->pattern->panel_count; ++p)
         for (int k = 0; k < 2; ++k) {
+            if (state->strain_limit <= 0) {
+                state->panels[p].solver[k].exact = 1;
+                continue;
+            }
             state->panels[p].solver[k].refactor = 1;
             state->panels[p].solver[k].borrowing = 0;
         }
