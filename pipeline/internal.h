@@ -91,6 +91,8 @@ typedef struct pl_symmetric {
     int restored;                    /* 1: it was given back (the layout did not use the plane) */
     pz_symmetry symmetry;            /* the plane, the input's residual, the exact maps of the symmetric garment */
     double deviation_max_mm, deviation_p95_mm;  /* the input's vertices' distance to it */
+    int32_t cut_faces, snapped_vertices;         /* what the symmetrization did, and its time */
+    double milliseconds;
     pz_mesh *original;               /* the garment as loaded (while active) */
     double *original_positions_out;
     int original_ids_preserved;
@@ -110,8 +112,9 @@ pz_status pl_symmetrize_garment(const pz_run_options *options, pz_result *result
 void pl_symmetric_restore(pl_symmetric *sym, pz_result *result, pl_garment *garment);
 /** Vertices moved along the surface (seam truing) made symmetric again: each pair averaged through the plane. */
 void pl_symmetric_resettle(const pl_symmetric *sym, pz_mesh *mesh);
-/** The symmetrization's figures in result (symmetrized, its deviation; -1 when the garment is the input's). */
-void pl_symmetric_report(const pl_symmetric *sym, pz_result *result);
+/** The symmetrization's figures in result (symmetrized, its deviation; -1 when the garment is the input's), and
+ * a note saying what it did when the garment laid out is the symmetric one (ctx NULL: no note). */
+void pl_symmetric_report(const pl_symmetric *sym, pz_result *result, pz_ctx *ctx);
 void pl_symmetric_clear(pl_symmetric *sym);
 /** 1 when a panel of result's flattening (pattern, uv) misses a goal of the run (pl_judge_panels, rest pose). */
 int pl_symmetric_misses_goals(const pz_result *result, const pz_mesh *garment, pz_ctx *ctx);
@@ -177,6 +180,8 @@ void pl_segmenter_report(pl_segmenter *segmenter, pz_result *result);
 /** The plane to use, with its maps (the symmetric garment's exact ones), instead of detecting one; `symmetry`
  * stays the caller's and must outlive the segmenter's first choice. */
 void pl_segmenter_give_plane(pl_segmenter *segmenter, const pz_symmetry *symmetry);
+/** The strain outlook (can S be met?) of `from`, taken already: not measured nor said again. */
+void pl_segmenter_take_outlook(pl_segmenter *segmenter, const pl_segmenter *from);
 /** 1 when the layout last chosen was made with the plane (mirrored). */
 int pl_segmenter_plane_used(const pl_segmenter *segmenter);
 

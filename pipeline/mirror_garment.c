@@ -134,11 +134,8 @@ pz_status pl_symmetrize_garment(const pz_run_options *options, pz_result *result
     garment->ids_preserved = 0; /* the caller's ids name none of its vertices */
     result->positions_out = positions_out;
     s.mesh = NULL;
-    pz_note(ctx, "run: symmetry: the garment made exactly symmetric about (%.4f, %.4f, %.4f) . p = %.2f mm: %d faces "
-            "cut, %d vertices snapped; the input within %.2f mm of it (95 %%: %.2f mm), %d vertices, %d faces "
-            "(%.0f ms)", found.normal[0], found.normal[1], found.normal[2], found.offset, (int)s.cut_faces,
-            (int)s.snapped_vertices, sym->deviation_max_mm, sym->deviation_p95_mm, (int)garment->mesh->vertex_count,
-            (int)garment->mesh->face_count, pz_elapsed_ms(start, pz_seconds()));
+    sym->cut_faces = s.cut_faces, sym->snapped_vertices = s.snapped_vertices;
+    sym->milliseconds = pz_elapsed_ms(start, pz_seconds());
     pz_symmetrized_clear(&s);
     pz_symmetry_clear(&found);
     return PZ_OK;
@@ -182,8 +179,16 @@ void pl_symmetric_resettle(const pl_symmetric *sym, pz_mesh *mesh)
     }
 }
 
-void pl_symmetric_report(const pl_symmetric *sym, pz_result *result)
+void pl_symmetric_report(const pl_symmetric *sym, pz_result *result, pz_ctx *ctx)
 {
+    /* Said once the garment is kept (the run's errors, a bad sketch say, come first and alone). */
+    if (sym->active && ctx)
+        pz_note(ctx, "run: symmetry: laid out on the garment made exactly symmetric about (%.4f, %.4f, %.4f) . p = "
+                "%.2f mm: %d faces cut, %d vertices snapped; the input within %.2f mm of it (95 %%: %.2f mm), %d "
+                "vertices, %d faces (%.0f ms)", sym->symmetry.normal[0], sym->symmetry.normal[1],
+                sym->symmetry.normal[2], sym->symmetry.offset, (int)sym->cut_faces, (int)sym->snapped_vertices,
+                sym->deviation_max_mm, sym->deviation_p95_mm, (int)sym->symmetry.vertex_count,
+                (int)sym->symmetry.face_count, sym->milliseconds);
     result->symmetrized = sym->active;
     result->symmetrized_max_mm = sym->active ? sym->deviation_max_mm : -1;
     result->symmetrized_p95_mm = sym->active ? sym->deviation_p95_mm : -1;

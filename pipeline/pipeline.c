@@ -251,6 +251,9 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
         mark = pz_seconds();
         status = choose_panels(run, result, round, ctx);
         result->timings.panels += pz_elapsed_ms(mark, pz_seconds());
+        /* The symmetric garment without the plane's layout is not kept: no flattening of it (redo_as_loaded). */
+        if (status == PZ_OK && run->symmetric.active && !pl_segmenter_plane_used(run->segmenter))
+            return PZ_OK;
         if (status == PZ_OK)
             status = pz_pattern_build(run->garment.mesh, run->choice.face_panel, run->choice.extra_cuts,
                                       &run->correspondences, name, &result->pattern, ctx);
@@ -317,14 +320,18 @@ static pz_status redo_as_loaded(pipeline_run *run, pz_result *result, pz_ctx *ct
 {
     pz_note(ctx, "run: symmetry: the layout %s: the garment as loaded is laid out again",
             pl_segmenter_plane_used(run->segmenter) ? "made with the plane misses the goals" : "does not use the plane");
-    pl_segmenter_free(&run->segmenter);
     pl_backend_outcome_clear(&result->backend);
     free(result->uv);
     result->uv = NULL;
     pz_pattern_free(&result->pattern);
     pl_panel_choice_clear(&run->choice);
     pl_symmetric_restore(&run->symmetric, result, &run->garment);
+    pl_segmenter *first = run->segmenter;
+    run->segmenter = NULL;
     pz_status status = pl_segmenter_create(&result->options, result->prepared, result->grain, &run->segmenter, ctx);
+    if (status == PZ_OK) /* said once, before the long work: the symmetric garment's outlook stands */
+        pl_segmenter_take_outlook(run->segmenter, first);
+    pl_segmenter_free(&first);
     return status == PZ_OK ? flatten_rounds(run, result, ctx) : status;
 }
 
@@ -369,7 +376,7 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
         status = measure(&run, result, ctx);
     if (run.segmenter)
         pl_segmenter_report(run.segmenter, result);
-    pl_symmetric_report(&run.symmetric, result);
+    pl_symmetric_report(&run.symmetric, result, status == PZ_OK ? ctx : NULL);
     if (status == PZ_OK) {
         /* The garment as flattened belongs to the result from here. */
         result->garment = run.garment.mesh;

@@ -1023,6 +1023,12 @@ void pl_segmenter_give_plane(pl_segmenter *seg, const pz_symmetry *symmetry)
     seg->given_plane = symmetry;
 }
 
+void pl_segmenter_take_outlook(pl_segmenter *seg, const pl_segmenter *from)
+{
+    if (from)
+        seg->outlook = from->outlook;
+}
+
 int pl_segmenter_plane_used(const pl_segmenter *seg)
 {
     return seg->plane && seg->goals.symmetry_used;
