@@ -132,7 +132,7 @@ typedef struct pz_symmetrized {
                                  plane); a bijection, its own inverse */
     int32_t *face_mirror;     /* mesh->face_count: face f's reflection (f + half the faces, and back) */
     uint8_t *vertex_side;     /* mesh->vertex_count: 0 the kept (negative) side, 1 on the plane, 2 the reflection */
-    int32_t snapped_vertices; /* input vertices put onto the plane (within 5 % of the mean edge length of it) */
+    int32_t snapped_vertices; /* input vertices put onto the plane (within a tenth of the mean edge length of it) */
     int32_t cut_faces;        /* input faces the plane crossed */
     double deviation_max_mm;  /* the input's vertices' distance to the symmetric surface: largest */
     double deviation_p95_mm;  /* and 95th percentile */
