@@ -14,6 +14,7 @@
  *                  pattern's mirror symmetry
  *   mirror.c       exact mirror pieces: pairs and pieces crossed by the plane
  *   mirror_pairing.c  their outlines paired (mirror_internal.h), the residual
+ *   mirror_garment.c  the garment made exactly symmetric before the layout
  *   tradeoff.c     the outlook on S before the segmentation, the trade-off curve after the verdict
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
  *   names.c        the pieces' names from their place on the garment
@@ -82,6 +83,42 @@ pz_status pl_load(const pz_mesh *input, const pz_run_options *options, int prepa
                   pl_garment *garment, pz_ctx *ctx);
 void pl_garment_clear(pl_garment *garment);
 
+/* ---------------------------------------------------------------- mirror_garment.c */
+
+/** The garment made exactly symmetric before the automatic layout, and what gives it back. */
+typedef struct pl_symmetric {
+    int active;                      /* 1: the garment being laid out is the symmetric one */
+    int restored;                    /* 1: it was given back (the layout did not use the plane) */
+    pz_symmetry symmetry;            /* the plane, the input's residual, the exact maps of the symmetric garment */
+    double deviation_max_mm, deviation_p95_mm;  /* the input's vertices' distance to it */
+    int32_t cut_faces, snapped_vertices;         /* what the symmetrization did, and its time */
+    double milliseconds;
+    pz_mesh *original;               /* the garment as loaded (while active) */
+    double *original_positions_out;
+    int original_ids_preserved;
+    int32_t *original_seam_vertices; /* the preparation's welded seams in the garment's own ids */
+} pl_symmetric;
+
+/**
+ * With a plane found or given (options->segment.symmetry not off) on a garment
+ * without poses: garment->mesh replaced by the exactly symmetric garment,
+ * result->positions_out by its positions and the preparation's welded seams
+ * mapped onto it; sym keeps what pl_symmetric_restore gives back. Otherwise
+ * sym->active 0 and nothing changes. Errors: PZ_ERR_NOMEM.
+ */
+pz_status pl_symmetrize_garment(const pz_run_options *options, pz_result *result, pl_garment *garment,
+                                pl_symmetric *sym, pz_ctx *ctx);
+/** The garment, positions_out and welded seams as loaded (sym->restored set); nothing when not active. */
+void pl_symmetric_restore(pl_symmetric *sym, pz_result *result, pl_garment *garment);
+/** Vertices moved along the surface (seam truing) made symmetric again: each pair averaged through the plane. */
+void pl_symmetric_resettle(const pl_symmetric *sym, pz_mesh *mesh);
+/** The symmetrization's figures in result (symmetrized, its deviation; -1 when the garment is the input's), and
+ * a note saying what it did when the garment laid out is the symmetric one (ctx NULL: no note). */
+void pl_symmetric_report(const pl_symmetric *sym, pz_result *result, pz_ctx *ctx);
+void pl_symmetric_clear(pl_symmetric *sym);
+/** 1 when a panel of result's flattening (pattern, uv) misses a goal of the run (pl_judge_panels, rest pose). */
+int pl_symmetric_misses_goals(const pz_result *result, const pz_mesh *garment, pz_ctx *ctx);
+
 /* ---------------------------------------------------------------- panels.c */
 
 /** Panels chosen for one flattening: per-face ids, names, extra cuts (all owned). */
@@ -140,6 +177,13 @@ pz_status pl_segmenter_exact_mirrors(pl_segmenter *segmenter, const pz_pattern *
 
 /** Moves what the run reports (segmentation, field, truing, rounds, ladder) into the result. */
 void pl_segmenter_report(pl_segmenter *segmenter, pz_result *result);
+/** The plane to use, with its maps (the symmetric garment's exact ones), instead of detecting one; `symmetry`
+ * stays the caller's and must outlive the segmenter's first choice. */
+void pl_segmenter_give_plane(pl_segmenter *segmenter, const pz_symmetry *symmetry);
+/** The strain outlook (can S be met?) of `from`, taken already: not measured nor said again. */
+void pl_segmenter_take_outlook(pl_segmenter *segmenter, const pl_segmenter *from);
+/** 1 when the layout last chosen was made with the plane (mirrored). */
+int pl_segmenter_plane_used(const pl_segmenter *segmenter);
 
 /* ---------------------------------------------------------------- flatten.c */
 

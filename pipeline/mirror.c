@@ -642,6 +642,138 @@ static int exact_pair(const correspondence *c, const outlines *o, int32_t p, int
     return done;
 }
 
+/* ---------------------------------------------------------------- an exactly symmetric garment */
+
+/* The garment's mirror map is exact when every vertex's mirror vertex lies at its reflection (the symmetrized
+ * garment, pipeline/mirror_garment.c): within this (mm). */
+#define EXACT_MAP_MM 1e-6
+
+/* 1 when every cut-mesh vertex's garment vertex has its mirror vertex at its exact reflection. */
+static int garment_exactly_symmetric(const correspondence *c)
+{
+    const pz_pattern *pattern = c->pattern;
+    const pz_symmetry *symmetry = c->symmetry;
+    for (int32_t v = 0; v < pattern->mesh->vertex_count; ++v) {
+        int32_t g = pattern->vertex_origin[v], m = g >= 0 && g < symmetry->vertex_count ? symmetry->vertex_mirror[g] : -1;
+        if (m < 0 || c->copy_start[m] == c->copy_start[m + 1])
+            return 0;
+        double image[3];
+        pz_symmetry_reflect_point(symmetry, pattern->mesh->positions + 3 * (size_t)v, image);
+        if (pz_vec3_distance(image, pattern->mesh->positions + 3 * (size_t)c->copies[c->copy_start[m]]) > EXACT_MAP_MM)
+            return 0;
+    }
+    return 1;
+}
+
+/*
+ * The cut-mesh vertex map of panel p onto q through the faces: corner k of a
+ * face of p goes to the corner of its mirror face holding the mirror vertex
+ * (exact on a symmetric garment whose layout is symmetric, copies along
+ * darts and cuts included). map: cut vertex count, -1 outside p. 0 when a
+ * face's image is not in q or a vertex would map to two.
+ */
+static int panel_vertex_map(const correspondence *c, int32_t p, int32_t q, int32_t *map)
+{
+    const pz_pattern *pattern = c->pattern;
+    const pz_mesh *mesh = pattern->mesh;
+    const pz_symmetry *symmetry = c->symmetry;
+    if (symmetry->face_count != mesh->face_count)
+        return 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f) {
+        if (pattern->face_panel[f] != p)
+            continue;
+        int32_t image = symmetry->face_mirror[f];
+        if (image < 0 || pattern->face_panel[image] != q)
+            return 0;
+        for (int k = 0; k < 3; ++k) {
+            int32_t v = mesh->faces[3 * (size_t)f + k], mirror = symmetry->vertex_mirror[pattern->vertex_origin[v]];
+            int32_t w = -1;
+            for (int j = 0; j < 3; ++j)
+                if (pattern->vertex_origin[mesh->faces[3 * (size_t)image + j]] == mirror)
+                    w = mesh->faces[3 * (size_t)image + j];
+            if (w < 0 || (map[v] >= 0 && map[v] != w))
+                return 0;
+            map[v] = w;
+        }
+    }
+    return 1;
+}
+
+/* The reflection x -> M x + t (M = [[cos, sin], [sin, -cos]]) taking the points uv[v] closest to uv[map[v]], over
+ * the vertices of `list` (least squares: the reflection Procrustes problem). */
+static mirror2 fit_vertex_reflection(const int32_t *list, int32_t n, const int32_t *map, const double *uv)
+{
+    double ca[2] = {0, 0}, cb[2] = {0, 0};
+    for (int32_t i = 0; i < n; ++i)
+        for (int d = 0; d < 2; ++d)
+            ca[d] += uv[2 * list[i] + d] / n, cb[d] += uv[2 * map[list[i]] + d] / n;
+    double sc = 0, ss = 0;
+    for (int32_t i = 0; i < n; ++i) {
+        double ax = uv[2 * list[i]] - ca[0], ay = uv[2 * list[i] + 1] - ca[1];
+        double bx = uv[2 * map[list[i]]] - cb[0], by = uv[2 * map[list[i]] + 1] - cb[1];
+        sc += bx * ax - by * ay, ss += bx * ay + by * ax;
+    }
+    double length = hypot(sc, ss);
+    double cs = length > 0 ? sc / length : 1, sn = length > 0 ? ss / length : 0;
+    mirror2 r = {{{cs, sn}, {sn, -cs}}, {0, 0}};
+    r.t[0] = cb[0] - (r.m[0][0] * ca[0] + r.m[0][1] * ca[1]);
+    r.t[1] = cb[1] - (r.m[1][0] * ca[0] + r.m[1][1] * ca[1]);
+    return r;
+}
+
+/*
+ * Panel p and its partner q (q == p: crossed by the plane) made exact mirror
+ * images through the exact vertex map: the reflection fitted to the two
+ * flattenings, each vertex of p moved to the mean of its point and its
+ * image's point reflected back, and q's vertices to the reflections of p's.
+ * For a panel crossed by the plane the map is an involution and the fitted
+ * reflection too, so the mean is its own mirror image. Two near copies of one
+ * flattening average to one as good. 0 when the map is not exact (the
+ * layout is not symmetric there): the caller pairs the outlines instead.
+ * map, list: cut vertex count each, map all -1 (left so).
+ */
+static int exact_pair_mapped(const correspondence *c, int32_t p, int32_t q, int32_t *map, int32_t *list,
+                             double *uv)
+{
+    const pz_mesh *mesh = c->pattern->mesh;
+    int ok = panel_vertex_map(c, p, q, map);
+    int32_t n = 0;
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        if (map[v] >= 0)
+            list[n++] = v;
+    for (int32_t i = 0; ok && p == q && i < n; ++i) /* an involution on p's vertices */
+        ok = map[map[list[i]]] == list[i];
+    if (ok && n > 0) {
+        mirror2 r = fit_vertex_reflection(list, n, map, uv);
+        if (p == q) {
+            double *mean = malloc((2 * (size_t)n + 1) * sizeof(double));
+            if (!mean)
+                ok = 0;
+            for (int32_t i = 0; mean && i < n; ++i) {
+                double back[2];
+                pl_mirror2_back(&r, uv + 2 * map[list[i]], back);
+                mean[2 * i] = 0.5 * (uv[2 * list[i]] + back[0]);
+                mean[2 * i + 1] = 0.5 * (uv[2 * list[i] + 1] + back[1]);
+            }
+            for (int32_t i = 0; mean && i < n; ++i)
+                memcpy(uv + 2 * list[i], mean + 2 * i, 2 * sizeof(double));
+            free(mean);
+        } else {
+            for (int32_t i = 0; i < n; ++i) {
+                int32_t v = list[i];
+                double back[2];
+                pl_mirror2_back(&r, uv + 2 * map[v], back);
+                uv[2 * v] = 0.5 * (uv[2 * v] + back[0]);
+                uv[2 * v + 1] = 0.5 * (uv[2 * v + 1] + back[1]);
+                pl_mirror2_apply(&r, uv + 2 * v, uv + 2 * map[v]);
+            }
+        }
+    }
+    for (int32_t i = 0; i < n; ++i)
+        map[list[i]] = -1;
+    return ok && n > 0;
+}
+
 pz_status pl_exact_mirror_pieces(const pz_pattern *pattern, const pz_segment_result *segment, double max_strain,
                                  double *uv, int32_t *exact, int32_t *pieces, pz_ctx *ctx)
 {
@@ -659,6 +791,7 @@ pz_status pl_exact_mirror_pieces(const pz_pattern *pattern, const pz_segment_res
     int32_t *local = malloc(((size_t)mesh->vertex_count + 1) * sizeof(int32_t));
     double *old = malloc((2 * (size_t)mesh->vertex_count + 2) * sizeof(double));
     double *mid = malloc((2 * (size_t)mesh->vertex_count + 2) * sizeof(double));
+    int32_t *local_list = malloc(((size_t)mesh->vertex_count + 1) * sizeof(int32_t));
     correspondence c;
     memset(&c, 0, sizeof c);
     pz_ctx quiet;
@@ -674,20 +807,24 @@ pz_status pl_exact_mirror_pieces(const pz_pattern *pattern, const pz_segment_res
             positions[0][g] = positions[1][g] = -1;
         for (int32_t v = 0; v < mesh->vertex_count; ++v)
             local[v] = -1;
+        int mapped = local_list && garment_exactly_symmetric(&c);
         for (int32_t p = 0; p < pattern->panel_count; ++p) {
             int32_t q = segment->panels[p].mirror_panel;
             int self = q == p, pair = q >= 0 && q != p && segment->panels[q].copy && !segment->panels[p].copy &&
                                      segment->panels[q].mirror_panel == p;
-            if (self || pair) {
-                ++*pieces;
+            if (!self && !pair)
+                continue;
+            ++*pieces;
+            if (mapped && exact_pair_mapped(&c, p, q, local, local_list, uv))
+                ++*exact;
+            else
                 *exact += exact_pair(&c, &o, p, q, max_strain, positions, local, old, mid, uv);
-            }
         }
     }
     pl_outlines_free(&o);
     correspondence_free(&c);
     pz_topology_free(&topology);
-    free(positions[0]), free(positions[1]), free(local), free(old), free(mid);
+    free(positions[0]), free(positions[1]), free(local), free(old), free(mid), free(local_list);
     if (status == PZ_ERR_NOMEM)
         return pz_error(ctx, status, "run: out of memory making the mirror pieces exact");
     if (status != PZ_OK) /* a cut mesh without topology: leave the pieces as flattened */

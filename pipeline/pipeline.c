@@ -192,6 +192,7 @@ typedef struct pipeline_run {
     pl_segmenter *segmenter;         /* pz_run without panels */
     pl_panel_choice choice;
     pz_correspondences correspondences;
+    pl_symmetric symmetric;          /* the garment made exactly symmetric (mirror_garment.c) */
 } pipeline_run;
 
 static void pipeline_run_clear(pipeline_run *run)
@@ -200,6 +201,7 @@ static void pipeline_run_clear(pipeline_run *run)
     pl_segmenter_free(&run->segmenter);
     pl_panel_choice_clear(&run->choice);
     pz_correspondences_clear(&run->correspondences);
+    pl_symmetric_clear(&run->symmetric);
 }
 
 /* The panels for this round: the segmentation's (its vertices may move: seam truing, and garment.obj's
@@ -220,6 +222,8 @@ static pz_status choose_panels(pipeline_run *run, pz_result *result, int round, 
         return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
     memcpy(before, mesh->positions, size * sizeof(double));
     pz_status status = pl_segmenter_choose(run->segmenter, mesh, &run->choice, ctx);
+    if (status == PZ_OK && pl_segmenter_plane_used(run->segmenter)) /* trued seams stay exact mirror images */
+        pl_symmetric_resettle(&run->symmetric, mesh);
     for (size_t v = 0; status == PZ_OK && v < size / 3; ++v)
         if (memcmp(before + 3 * v, mesh->positions + 3 * v, 3 * sizeof(double)) != 0)
             for (int d = 0; d < 3; ++d)
@@ -247,6 +251,9 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
         mark = pz_seconds();
         status = choose_panels(run, result, round, ctx);
         result->timings.panels += pz_elapsed_ms(mark, pz_seconds());
+        /* The symmetric garment without the plane's layout is not kept: no flattening of it (redo_as_loaded). */
+        if (status == PZ_OK && run->symmetric.active && !pl_segmenter_plane_used(run->segmenter))
+            return PZ_OK;
         if (status == PZ_OK)
             status = pz_pattern_build(run->garment.mesh, run->choice.face_panel, run->choice.extra_cuts,
                                       &run->correspondences, name, &result->pattern, ctx);
@@ -302,6 +309,32 @@ static pz_status measure(pipeline_run *run, pz_result *result, pz_ctx *ctx)
     return status;
 }
 
+/*
+ * The symmetric garment was not worth it (its layout does not use the plane,
+ * or a piece budget's mirrored layout misses the goals): the garment is given
+ * back as loaded and the run made again as it was before symmetrizing (the
+ * plane found again, mirrored layouts on the garment as it is), so a run that
+ * does not keep the symmetric garment is unchanged.
+ */
+static pz_status redo_as_loaded(pipeline_run *run, pz_result *result, pz_ctx *ctx)
+{
+    pz_note(ctx, "run: symmetry: the layout %s: the garment as loaded is laid out again",
+            pl_segmenter_plane_used(run->segmenter) ? "made with the plane misses the goals" : "does not use the plane");
+    pl_backend_outcome_clear(&result->backend);
+    free(result->uv);
+    result->uv = NULL;
+    pz_pattern_free(&result->pattern);
+    pl_panel_choice_clear(&run->choice);
+    pl_symmetric_restore(&run->symmetric, result, &run->garment);
+    pl_segmenter *first = run->segmenter;
+    run->segmenter = NULL;
+    pz_status status = pl_segmenter_create(&result->options, result->prepared, result->grain, &run->segmenter, ctx);
+    if (status == PZ_OK) /* said once, before the long work: the symmetric garment's outlook stands */
+        pl_segmenter_take_outlook(run->segmenter, first);
+    pl_segmenter_free(&first);
+    return status == PZ_OK ? flatten_rounds(run, result, ctx) : status;
+}
+
 static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_run_options *options, int from_run,
                          pz_result **out, pz_ctx *ctx)
 {
@@ -326,13 +359,24 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
     pl_stage(ctx, segment ? "prepare" : "load", 0, 0.1, options && options->name ? options->name : "");
     pz_status status = pl_load(mesh, &result->options, segment && result->options.prepare, result, &run.garment, ctx);
     if (status == PZ_OK && segment)
+        status = pl_symmetrize_garment(&result->options, result, &run.garment, &run.symmetric, ctx);
+    if (status == PZ_OK && segment)
         status = pl_segmenter_create(&result->options, result->prepared, result->grain, &run.segmenter, ctx);
+    if (status == PZ_OK && run.symmetric.active)
+        pl_segmenter_give_plane(run.segmenter, &run.symmetric.symmetry);
     if (status == PZ_OK)
         status = flatten_rounds(&run, result, ctx);
+    /* The symmetric garment is kept with a layout that uses the plane; a piece budget's mirrored layout (no
+     * verdict rounds drop its plane) also only when its flattening meets the goals. */
+    if (status == PZ_OK && run.symmetric.active &&
+        (!pl_segmenter_plane_used(run.segmenter) ||
+         (result->options.segment.max_pieces > 0 && pl_symmetric_misses_goals(result, run.garment.mesh, ctx))))
+        status = redo_as_loaded(&run, result, ctx);
     if (status == PZ_OK)
         status = measure(&run, result, ctx);
     if (run.segmenter)
         pl_segmenter_report(run.segmenter, result);
+    pl_symmetric_report(&run.symmetric, result, status == PZ_OK ? ctx : NULL);
     if (status == PZ_OK) {
         /* The garment as flattened belongs to the result from here. */
         result->garment = run.garment.mesh;

@@ -312,6 +312,9 @@ typedef struct pz_result {
      * counts of the first layouts with and without it (-1: not made). */
     pz_symmetry symmetry;
     int symmetry_used;
+    int symmetrized;                 /* 1: laid out on the garment made exactly symmetric (garment.obj is it) */
+    double symmetrized_max_mm;       /* the input's vertices' distance to it: largest, 95th percentile (-1) */
+    double symmetrized_p95_mm;
     int symmetry_rejected;           /* the joint flattening rejected the mirrored layout: made without the plane */
     int32_t pieces_with_symmetry, pieces_without_symmetry;
     int32_t mirror_pieces;           /* mirror pairs and panels crossed by the plane in the final layout */

@@ -567,6 +567,10 @@ static int extend_symmetry(const pz_result *result, cJSON *object)
     ok &= add_plain_number(symmetry, "mesh_residual_mm", plane->residual_mm);
     ok &= add_plain_number(symmetry, "mesh_residual_rel", pz_round(plane->residual_rel, 6));
     ok &= add_plain_number(symmetry, "mesh_rms_mm", plane->rms_mm);
+    /* The garment laid out (garment.obj) is the input made exactly symmetric: how far the input is from it. */
+    ok &= cJSON_AddBoolToObject(symmetry, "symmetrized", result->symmetrized) != NULL;
+    ok &= add_plain_number(symmetry, "symmetrized_max_mm", pz_round(result->symmetrized_max_mm, 4));
+    ok &= add_plain_number(symmetry, "symmetrized_p95_mm", pz_round(result->symmetrized_p95_mm, 4));
     ok &= add_plain_number(symmetry, "pieces_with_plane", result->pieces_with_symmetry);
     ok &= add_plain_number(symmetry, "pieces_without_plane", result->pieces_without_symmetry);
     ok &= add_plain_number(symmetry, "layout_residual_mm", used ? segment->symmetry_residual_mm : 0);

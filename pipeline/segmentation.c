@@ -86,6 +86,7 @@ struct pl_segmenter {
     pz_field *field;                    /* the cross-field of the original surface, computed once */
     /* The mirror plane (docs/segment.md, "Symmetry"): detected (or the user's) once, before the field. */
     pz_symmetry symmetry;
+    const pz_symmetry *given_plane;     /* the symmetric garment's plane and exact maps (pl_segmenter_give_plane) */
     pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
     int plane;                          /* 1: a plane was found or given (each goal setting decides its use) */
     int32_t mirror_pieces, exact_mirror_pieces; /* of the last flattening (pl_segmenter_exact_mirrors) */
@@ -236,7 +237,9 @@ static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_
     double plane[4];
     memcpy(plane, given->symmetry_plane, sizeof plane);
     plane[3] *= garment->unit_scale; /* the user's plane is in the input's units, the garment in millimetres */
-    pz_status status = pz_symmetry_detect(garment, topology, given->symmetry, plane, 0, &seg->symmetry, ctx);
+    pz_status status = seg->given_plane && seg->given_plane->vertex_count == garment->vertex_count
+                           ? pz_symmetry_copy(seg->given_plane, &seg->symmetry, ctx)
+                           : pz_symmetry_detect(garment, topology, given->symmetry, plane, 0, &seg->symmetry, ctx);
     seg->plane = status == PZ_OK && seg->symmetry.found;
     if (status == PZ_OK && seg->symmetry.found)
         status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
@@ -1013,6 +1016,22 @@ void pl_segmenter_free(pl_segmenter **segmenter)
     free(seg->original_poses);
     free(seg);
     *segmenter = NULL;
+}
+
+void pl_segmenter_give_plane(pl_segmenter *seg, const pz_symmetry *symmetry)
+{
+    seg->given_plane = symmetry;
+}
+
+void pl_segmenter_take_outlook(pl_segmenter *seg, const pl_segmenter *from)
+{
+    if (from)
+        seg->outlook = from->outlook;
+}
+
+int pl_segmenter_plane_used(const pl_segmenter *seg)
+{
+    return seg->plane && seg->goals.symmetry_used;
 }
 
 void pl_segmenter_report(pl_segmenter *seg, pz_result *result)

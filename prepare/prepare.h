@@ -125,6 +125,35 @@ pz_status pz_prepare_auto(const pz_mesh *mesh, const pz_prepare_options *options
  */
 pz_status pz_prepare_make_manifold(pz_mesh *mesh, int32_t *dropped_faces, int32_t *split_vertices, pz_ctx *ctx);
 
+/** An exactly mirror-symmetric garment (pz_prepare_symmetrize). */
+typedef struct pz_symmetrized {
+    pz_mesh *mesh;            /* the kept half (its vertices first), then its reflection; no UVs or poses */
+    int32_t *vertex_mirror;   /* mesh->vertex_count: the vertex at each vertex's exact reflection (itself on the
+                                 plane); a bijection, its own inverse */
+    int32_t *face_mirror;     /* mesh->face_count: face f's reflection (f + half the faces, and back) */
+    uint8_t *vertex_side;     /* mesh->vertex_count: 0 the kept (negative) side, 1 on the plane, 2 the reflection */
+    int32_t snapped_vertices; /* input vertices put onto the plane (within a tenth of the mean edge length of it) */
+    int32_t cut_faces;        /* input faces the plane crossed */
+    double deviation_max_mm;  /* the input's vertices' distance to the symmetric surface: largest */
+    double deviation_p95_mm;  /* and 95th percentile */
+    int32_t *input_nearest;   /* input vertex count: the symmetric vertex nearest each input vertex */
+} pz_symmetrized;
+
+/**
+ * The garment made exactly symmetric about the plane normal . p = offset
+ * (pietroni2022 Sec. 3): the faces the plane crosses cut, vertices near it
+ * snapped onto it, the negative half kept, reflected and welded along the
+ * plane (docs/segment.md, "The symmetrized garment"). `mesh` (a valid
+ * manifold, mm, its poses ignored) is not changed; labels follow the faces.
+ * PZ_ERR_DATA when nothing lies on the negative side or the result is not a
+ * valid manifold (the garment meets the plane along a fold); PZ_ERR_USAGE for
+ * a zero normal. On success *out owns its arrays (pz_symmetrized_clear); on
+ * failure it is zeroed.
+ */
+pz_status pz_prepare_symmetrize(const pz_mesh *mesh, const double normal[3], double offset, pz_symmetrized *out,
+                                pz_ctx *ctx);
+void pz_symmetrized_clear(pz_symmetrized *symmetrized);
+
 /** Frees the result, its mesh and seams, and sets *result to NULL (NULL or *result NULL: nothing). */
 void pz_prepare_result_free(pz_prepare_result **result);
 
