@@ -23,6 +23,8 @@ packages=(
   libeigen3-dev           # only bench_peer's libigl peer (cmake --build build --target igl_peer) includes it
   clang libclang-rt-14-dev  # libFuzzer targets
   slurm-wlm munge         # tests/batch/test_batch_slurm.sh runs a batch as a Slurm job array (docs/batch.md)
+  libmicrohttpd-dev curl  # panelize studio's web server (docs/studio.md); its API test talks to it with curl
+  chromium                # the studio's browser test drives it headless (playwright-core from npm, at build time)
 )
 
 missing=()
