@@ -232,6 +232,7 @@ static void garment_free(pz_studio *studio, studio_garment *garment)
     }
     studio_output_release(studio, garment->output);
     pz_mesh_free(&garment->mesh);
+    pz_sketch_free(&garment->welded);
     free(garment->mesh_json);
     free(garment);
 }
@@ -259,6 +260,55 @@ static double mean_edge_length(const pz_mesh *mesh)
     return mesh->face_count ? sum / (3.0 * mesh->face_count) : 0;
 }
 
+/* The seams welding closed (polylines of the prepared mesh's vertices) as sketch curves in millimetres. */
+static pz_status welded_seams(const pz_prepare_result *prepared, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx)
+{
+    int32_t count = prepared->seam_count, points = prepared->seam_offsets[count];
+    pz_sketch *sketch = NULL;
+    pz_status status = studio_sketch_new(count, points, &sketch, ctx);
+    if (status != PZ_OK)
+        return status;
+    memcpy(sketch->curve_offsets, prepared->seam_offsets, ((size_t)count + 1) * sizeof(int32_t));
+    for (int32_t i = 0; i < points; ++i)
+        memcpy(sketch->points + 3 * (size_t)i, mesh->positions + 3 * (size_t)prepared->seam_vertices[i],
+               3 * sizeof(double));
+    *out = sketch;
+    return PZ_OK;
+}
+
+/*
+ * The automatic preparation, once per garment: every run would do it again (0.75 s of a 50K-face run,
+ * docs/studio.md "Speed"), and the strokes are drawn on the mesh the runs use. As pz_run does it: the
+ * prepared mesh replaces the garment when a step changed it, and the seams welding closed become curves
+ * every run adds to the strokes (*welded, or NULL).
+ */
+static pz_status prepare_once(pz_mesh **mesh, const char *name, pz_sketch **welded, pz_ctx *ctx)
+{
+    *welded = NULL;
+    pz_prepare_options options;
+    pz_prepare_options_default(&options);
+    options.name = name;
+    pz_ctx quiet;
+    pz_ctx_quiet(ctx, &quiet);
+    pz_prepare_result *prepared = NULL;
+    pz_status status = pz_prepare_auto(*mesh, &options, &prepared, &quiet);
+    if (status != PZ_OK)
+        return pz_error(ctx, status, "%s", quiet.error);
+    const pz_prepare_report *report = &prepared->report;
+    int changed = report->output_faces != report->input_faces || report->output_vertices != report->input_vertices;
+    for (int i = 0; i < PZ_PREPARE_STEP_COUNT; ++i)
+        changed |= report->steps[i].ran && i != PZ_PREPARE_HAUSDORFF && i != PZ_PREPARE_POSES;
+    if (changed) {
+        pz_mesh_free(mesh);
+        *mesh = prepared->mesh;
+        prepared->mesh = NULL;
+        if (prepared->seam_count > 0)
+            status = welded_seams(prepared, *mesh, welded, ctx);
+    }
+    pz_prepare_result_free(&prepared);
+    return status;
+}
+
 pz_status studio_garment_load(pz_studio *studio, const char *path, const char *name, int *id, pz_ctx *ctx)
 {
     pz_mesh *mesh = NULL;
@@ -271,15 +321,22 @@ pz_status studio_garment_load(pz_studio *studio, const char *path, const char *n
         return pz_error(ctx, PZ_ERR_DATA, "%s: no faces", name);
     }
     pz_mesh_to_mm(mesh, PZ_UNITS_AUTO, NULL);
+    pz_sketch *welded = NULL;
+    if ((status = prepare_once(&mesh, name, &welded, ctx)) != PZ_OK) {
+        pz_mesh_free(&mesh);
+        return status;
+    }
     studio_garment *garment = calloc(1, sizeof *garment);
     if (garment)
         garment->mesh_json = studio_mesh_json(mesh);
     if (!garment || !garment->mesh_json) {
         free(garment);
         pz_mesh_free(&mesh);
+        pz_sketch_free(&welded);
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", name);
     }
     garment->mesh = mesh;
+    garment->welded = welded;
     garment->mean_edge_mm = mean_edge_length(mesh);
     const char *slash = strrchr(name, '/');
     snprintf(garment->name, sizeof garment->name, "%s", slash && slash[1] ? slash + 1 : name);

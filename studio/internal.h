@@ -67,7 +67,9 @@ typedef struct studio_job {
 typedef struct studio_garment {
     int id;
     char name[256];                 /* the file's base name */
-    pz_mesh *mesh;                  /* as loaded, in millimetres; read by the runs, freed after them */
+    pz_mesh *mesh;                  /* as loaded, in millimetres, prepared (pz_prepare_auto) once; read by the
+                                       runs (which do not prepare again), freed after them */
+    pz_sketch *welded;              /* the seams the preparation welded, added to every run's strokes, or NULL */
     double mean_edge_mm;
     char *mesh_json;                /* {"positions": [...], "faces": [...]} of mesh */
     long last_used;
@@ -122,11 +124,15 @@ char *studio_garments_list_json(pz_studio *studio);
 
 /* ---------------------------------------------------------------- request.c */
 
-/* The run request's JSON into *options (from pz_run_options_default) and *sketch (NULL: no strokes):
- * unknown keys, wrong types, values out of range, too many or too long strokes, points not finite or far
- * from the garment (bbox of `mesh` grown by its diagonal) are PZ_ERR_USAGE with a message. */
-pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh, pz_run_options *options,
-                           pz_sketch **sketch, pz_ctx *ctx);
+/* The run request's JSON into *options (from pz_run_options_default; no preparation: the garment's was
+ * done once) and *sketch (the strokes, then the curves of `welded` (may be NULL); NULL when neither has
+ * any): unknown keys, wrong types, values out of range, too many or too long strokes, points not finite or
+ * far from the garment (bbox of `mesh` grown by its diagonal) are PZ_ERR_USAGE with a message. */
+pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh, const pz_sketch *welded,
+                           pz_run_options *options, pz_sketch **sketch, pz_ctx *ctx);
+/* A sketch with room for `curves` curves and `points` points (curve_count set, offsets zeroed), or
+ * PZ_ERR_NOMEM; freed with pz_sketch_free. */
+pz_status studio_sketch_new(int32_t curves, int32_t points, pz_sketch **out, pz_ctx *ctx);
 /* A path the page names, relative to root (or absolute), into `out` (PATH_MAX): it must resolve (symbolic
  * links followed; for `must_exist` 0 its nearest existing ancestor) inside root. PZ_ERR_USAGE otherwise. */
 pz_status studio_resolve_path(const pz_studio *studio, const char *path, int must_exist, char *out, pz_ctx *ctx);

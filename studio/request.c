@@ -99,6 +99,23 @@ static pz_status read_fabric(const cJSON *item, pz_flatten_options *flatten, pz_
     return PZ_OK;
 }
 
+pz_status studio_sketch_new(int32_t curves, int32_t points, pz_sketch **out, pz_ctx *ctx)
+{
+    pz_sketch *sketch = calloc(1, sizeof *sketch);
+    if (sketch) {
+        sketch->curve_offsets = calloc((size_t)curves + 1, sizeof(int32_t));
+        sketch->points = malloc(((size_t)points + 1) * 3 * sizeof(double));
+    }
+    if (!sketch || !sketch->curve_offsets || !sketch->points) {
+        pz_sketch_free(&sketch);
+        *out = NULL;
+        return pz_error(ctx, PZ_ERR_NOMEM, "strokes: out of memory");
+    }
+    sketch->curve_count = curves;
+    *out = sketch;
+    return PZ_OK;
+}
+
 /* One point [x, y, z] inside the box lo..hi into p. */
 static pz_status read_point(const cJSON *item, int stroke, int index, const double lo[3], const double hi[3],
                             double *p, pz_ctx *ctx)
@@ -143,18 +160,11 @@ static pz_status read_strokes(const cJSON *item, const pz_mesh *mesh, pz_sketch 
                            (hi[2] - lo[2]) * (hi[2] - lo[2]));
     for (int k = 0; k < 3; ++k)
         lo[k] -= diagonal, hi[k] += diagonal;
-    pz_sketch *sketch = calloc(1, sizeof *sketch);
-    if (sketch) {
-        sketch->curve_offsets = malloc(((size_t)count + 1) * sizeof(int32_t));
-        sketch->points = malloc(total * 3 * sizeof(double));
-    }
-    if (!sketch || !sketch->curve_offsets || !sketch->points) {
-        pz_sketch_free(&sketch);
-        return pz_error(ctx, PZ_ERR_NOMEM, "strokes: out of memory");
-    }
-    sketch->curve_count = count;
+    pz_sketch *sketch = NULL;
+    pz_status status = studio_sketch_new(count, (int32_t)total, &sketch, ctx);
+    if (status != PZ_OK)
+        return status;
     size_t at = 0;
-    pz_status status = PZ_OK;
     for (int s = 0; s < count && status == PZ_OK; ++s) {
         const cJSON *stroke = cJSON_GetArrayItem(item, s);
         sketch->curve_offsets[s] = (int32_t)at;
@@ -167,6 +177,31 @@ static pz_status read_strokes(const cJSON *item, const pz_mesh *mesh, pz_sketch 
         pz_sketch_free(&sketch);
     *out = sketch;
     return status;
+}
+
+/* *sketch (may be NULL: none) followed by the curves of `welded` (may be NULL), into a new *sketch. */
+static pz_status append_welded(pz_sketch **sketch, const pz_sketch *welded, pz_ctx *ctx)
+{
+    if (!welded || welded->curve_count == 0)
+        return PZ_OK;
+    const pz_sketch *first = *sketch;
+    int32_t first_curves = first ? first->curve_count : 0, first_points = first ? first->curve_offsets[first_curves] : 0;
+    int32_t curves = first_curves + welded->curve_count, points = first_points + welded->curve_offsets[welded->curve_count];
+    pz_sketch *joined = NULL;
+    pz_status status = studio_sketch_new(curves, points, &joined, ctx);
+    if (status != PZ_OK)
+        return status;
+    if (first) {
+        memcpy(joined->curve_offsets, first->curve_offsets, (size_t)first_curves * sizeof(int32_t));
+        memcpy(joined->points, first->points, (size_t)first_points * 3 * sizeof(double));
+    }
+    for (int32_t i = 0; i <= welded->curve_count; ++i)
+        joined->curve_offsets[first_curves + i] = first_points + welded->curve_offsets[i];
+    memcpy(joined->points + 3 * (size_t)first_points, welded->points,
+           (size_t)welded->curve_offsets[welded->curve_count] * 3 * sizeof(double));
+    pz_sketch_free(sketch);
+    *sketch = joined;
+    return PZ_OK;
 }
 
 /* One member of the run request into options or sketch. */
@@ -202,12 +237,13 @@ static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_opti
     return status;
 }
 
-pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh, pz_run_options *options,
-                           pz_sketch **sketch, pz_ctx *ctx)
+pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh, const pz_sketch *welded,
+                           pz_run_options *options, pz_sketch **sketch, pz_ctx *ctx)
 {
     *sketch = NULL;
     pz_run_options_default(options);
     options->units = PZ_UNITS_MM; /* the studio's garments are in millimetres once loaded */
+    options->prepare = 0;         /* and prepared once (garments.c) */
     cJSON *root = NULL;
     pz_status status = parse_object(body, length, &root, ctx);
     for (const cJSON *item = root ? root->child : NULL; item && status == PZ_OK; item = item->next) {
@@ -219,6 +255,8 @@ pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh,
             status = read_member(item, mesh, options, sketch, ctx);
     }
     cJSON_Delete(root);
+    if (status == PZ_OK)
+        status = append_welded(sketch, welded, ctx);
     if (status == PZ_OK)
         status = pz_run_options_check(options, "run", PZ_OPTION_KEYWORD, ctx);
     if (status != PZ_OK)

@@ -247,7 +247,8 @@ static enum MHD_Result start_run(pz_studio *studio, struct MHD_Connection *conne
     /* The garment's mesh stays until its runs are done; the request reads its box under the lock. */
     pthread_mutex_lock(&studio->lock);
     studio_garment *garment = studio_garment_find(studio, id);
-    pz_status status = garment ? studio_parse_run(body->body, body->length, garment->mesh, &options, &sketch, &ctx)
+    pz_status status = garment ? studio_parse_run(body->body, body->length, garment->mesh, garment->welded, &options,
+                                                  &sketch, &ctx)
                                : pz_error(&ctx, PZ_ERR_OPEN, "garment %d: not loaded", id);
     pthread_mutex_unlock(&studio->lock);
     int run_id = 0;
