@@ -96,6 +96,9 @@ static studio_output *make_output(pz_studio *studio, pz_result *result, int run_
     studio_output *output = calloc(1, sizeof *output);
     if (!output)
         return NULL;
+    snprintf(output->name, sizeof output->name, "%s", result->options.name ? result->options.name : "garment");
+    result->options.name = output->name;
+    result->options.sketch = NULL; /* the job's, freed by the next run */
     output->json = studio_result_json(result, run_id, ms, &output->json_length);
     if (!output->json) {
         free(output);
@@ -167,6 +170,7 @@ pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *opti
     }
     job->options = *options;
     job->lock = &studio->lock;
+    job->options.name = NULL; /* the garment's name, set below (it lives as long as the job) */
     job->sketch = sketch;
     job->options.sketch = sketch;
     pthread_mutex_lock(&studio->lock);
@@ -177,6 +181,7 @@ pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *opti
         return pz_error(ctx, PZ_ERR_USAGE, "garment %d: not loaded", id);
     }
     job->garment = garment;
+    job->options.name = garment->name; /* names the pieces (the file's base name) and the messages */
     job->run_id = ++garment->next_run;
     job->previous = garment->job;
     if (job->previous)

@@ -39,7 +39,9 @@ typedef enum studio_state {
 typedef struct studio_output {
     int refs;
     int run_id;
-    pz_result *result;
+    pz_result *result;              /* its options' strings point into this output (name) or are NULL (sketch):
+                                       an output outlives its run and may outlive its garment */
+    char name[256];                 /* the garment's name */
     char *json;                     /* the page's JSON of the result (result_json.c) */
     size_t json_length;
     pthread_mutex_t write_lock;     /* one writer of the files at a time */

@@ -351,6 +351,16 @@ static enum MHD_Result route_garment(pz_studio *studio, struct MHD_Connection *c
         studio_output_release(studio, output);
         return copy ? answer(connection, MHD_HTTP_OK, "application/json", copy, length) : answer_json(connection, 0, NULL);
     }
+    if (get && strcmp(action, "report") == 0) {
+        studio_output *output = studio_output_get(studio, (int)id);
+        if (!output)
+            return answer_error(connection, MHD_HTTP_NOT_FOUND, "no result yet");
+        cJSON *report = pz_result_report(output->result); /* report.json's content */
+        char *text = report ? cJSON_PrintUnformatted(report) : NULL;
+        cJSON_Delete(report);
+        studio_output_release(studio, output);
+        return answer_json(connection, MHD_HTTP_OK, text);
+    }
     if (get && strncmp(action, "files/", 6) == 0)
         return serve_result_file(studio, connection, (int)id, action + 6);
     if (post && strcmp(action, "run") == 0)

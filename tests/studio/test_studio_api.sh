@@ -111,6 +111,11 @@ check "seams with 3D points and both sides" [ "$(json "len(d['seams']) > 0 and a
     len(s['uv_a']) // 2 == len(s['uv_b']) // 2 for s in d['seams'])")" = True ]
 check "the options used (S = 0.08)" [ "$(json "d['verdict']['max_strain']")" = 0.08 ]
 check "no dart with darts off" [ "$(json "sum(s['kind'] == 'dart' for s in d['seams'])")" = 0 ]
+pieces=$(json "d['panel_count']")
+api GET "/api/garments/$id/report"
+check "report: $code" [ "$code" = 200 ]
+check "the report's panels are the result's" [ "$(json "d['summary']['panel_count']")" = "$pieces" ]
+check "the report names the garment" grep -q '"bodice' "$WORK/body"
 
 api POST "/api/garments/$id/run" '{}'
 run3=$(json "d['run']")
