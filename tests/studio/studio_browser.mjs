@@ -7,7 +7,7 @@
 // front through the page's own mouse events in "Draw seam" mode, and checks that the new layout has a
 // seam within 2 mean edge lengths of the stroke (90 % of the stroke's points; there was none before)
 // and that the pattern view draws that seam's two sides; changes S and checks the piece count changes;
-// hovers a piece for its tooltip; downloads the DXF. Screenshots go to OUT_DIR. Prints
+// hovers a piece for its tooltip; erases the stroke; downloads the DXF. Screenshots go to OUT_DIR. Prints
 // "N passed, M failed"; exit 1 when a check failed.
 // SPDX-License-Identifier: GPL-3.0-or-later
 import { createRequire } from 'node:module';
@@ -127,6 +127,14 @@ try {
     `(${after.result.panel_count} and ${strict.panel_count})`);
   check('the pattern view follows', await page.locator('#pattern polygon.piece').count() === strict.panel_count);
   await page.screenshot({ path: `${outDir}/studio-strict.png` });
+
+  // Erase: a click on the stroke in "Erase" mode removes it and runs again.
+  await page.click('#mode-erase');
+  const [ex, ey] = await page.evaluate((p) => window.studio.project(p), stroke[Math.floor(stroke.length / 2)]);
+  await page.mouse.click(ex, ey);
+  const erasedRun = await waitForRun(page, await page.evaluate(() => window.studio.state.shownRun));
+  check('erasing removes the stroke', await page.evaluate(() => window.studio.state.strokes.length) === 0);
+  check('erasing runs again', erasedRun > 0);
 
   // The DXF through the page's download button.
   const [download] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), page.click('#download-dxf')]);
