@@ -99,7 +99,7 @@ function showGarment(mesh, facePanel, seams) {
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(vertex, 3));
   geometry.setAttribute('color', new THREE.BufferAttribute(colour, 3));
-  geometry.computeVertexNormals();
+  geometry.setAttribute('normal', new THREE.BufferAttribute(smoothNormals(mesh, faces.length), 3));
   geometry.computeBoundingBox();
   geometry.computeBoundingSphere();
   const material = new THREE.MeshLambertMaterial({ vertexColors: true, side: THREE.DoubleSide,
@@ -118,6 +118,24 @@ function showGarment(mesh, facePanel, seams) {
       garmentGroup.add(new THREE.LineSegments(lines, new THREE.LineBasicMaterial({ color: colourOf })));
     }
   }
+}
+
+// Each corner's normal: its vertex's, the area-weighted sum of its faces' (smooth shading, while every
+// triangle keeps its own colour).
+function smoothNormals(mesh, cornerCount) {
+  const positions = mesh.positions, faces = mesh.faces, sum = new Float32Array(positions.length);
+  const a = new THREE.Vector3(), b = new THREE.Vector3(), c = new THREE.Vector3();
+  for (let f = 0; f < faces.length; f += 3) {
+    a.fromArray(positions, 3 * faces[f]); b.fromArray(positions, 3 * faces[f + 1]); c.fromArray(positions, 3 * faces[f + 2]);
+    const n = b.sub(a).cross(c.sub(a)); // twice the area, along the normal
+    for (let k = 0; k < 3; ++k)
+      for (let i = 0; i < 3; ++i) sum[3 * faces[f + k] + i] += n.getComponent(i);
+  }
+  const normals = new Float32Array(cornerCount * 3), n = new THREE.Vector3();
+  for (let corner = 0; corner < cornerCount; ++corner) {
+    n.fromArray(sum, 3 * faces[corner]).normalize().toArray(normals, 3 * corner);
+  }
+  return normals;
 }
 
 // Points the camera at the garment, looking at its broad side, its tallest axis up.
