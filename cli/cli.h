@@ -81,6 +81,9 @@
 #define PZ_CLI_OPT_RESUME (UINT64_C(1) << 50) /* --resume (batch; a flag) */
 #define PZ_CLI_OPT_TIMEOUT (UINT64_C(1) << 51) /* --timeout S (batch) */
 #define PZ_CLI_OPT_MERGE (UINT64_C(1) << 52) /* --merge (batch; a flag) */
+#define PZ_CLI_OPT_PORT (UINT64_C(1) << 53) /* --port N (studio) */
+#define PZ_CLI_OPT_LISTEN (UINT64_C(1) << 54) /* --listen ADDR (studio) */
+#define PZ_CLI_OPT_ROOT (UINT64_C(1) << 55) /* --root DIR (studio) */
 
 /* `batch`: the batch ran, but one garment or more failed (summary.csv says which and why): exit 1. */
 #define PZ_CLI_BATCH_FAILED ((pz_status)1)
@@ -93,7 +96,7 @@
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 44 /* up to bit 52 (--merge) */
+#define PZ_CLI_VALUE_COUNT 47 /* up to bit 55 (--root) */
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;
@@ -173,6 +176,8 @@ pz_status pz_cli_field(const pz_cli_args *args, pz_ctx *ctx);     /* cmd_field.c
 pz_status pz_cli_prepare(const pz_cli_args *args, pz_ctx *ctx);   /* cmd_prepare.c */
 pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx);       /* cmd_run.c */
 pz_status pz_cli_batch(const pz_cli_args *args, pz_ctx *ctx);     /* cmd_batch.c */
+pz_status pz_cli_studio(const pz_cli_args *args, pz_ctx *ctx);    /* cmd_studio.c */
+extern const char pz_cli_studio_usage[];
 extern const char pz_cli_batch_usage[];
 extern const char pz_cli_run_usage[];
 extern const char pz_cli_prepare_usage[];

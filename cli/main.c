@@ -49,6 +49,8 @@ static const pz_cli_command command_table[] = {
      pz_cli_run_usage, PZ_CLI_OPT_RUN, pz_cli_run},
     {"batch", "run many garments: folders, manifests, shards, resume, a summary",
      pz_cli_batch_usage, PZ_CLI_OPT_BATCH, pz_cli_batch},
+    {"studio", "a local web page: sketch seams on the 3D garment, see the pattern update",
+     pz_cli_studio_usage, PZ_CLI_OPT_COMMON | PZ_CLI_OPT_PORT | PZ_CLI_OPT_LISTEN | PZ_CLI_OPT_ROOT, pz_cli_studio},
     {"field", "compute the curvature-aligned cross-field that guides the seams",
      pz_cli_field_usage,
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
@@ -123,6 +125,9 @@ static const option_spec option_table[] = {
     {"resume", 0, PZ_CLI_OPT_RESUME, 0},
     {"timeout", 0, PZ_CLI_OPT_TIMEOUT, 1},
     {"merge", 0, PZ_CLI_OPT_MERGE, 0},
+    {"port", 0, PZ_CLI_OPT_PORT, 1},
+    {"listen", 0, PZ_CLI_OPT_LISTEN, 1},
+    {"root", 0, PZ_CLI_OPT_ROOT, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 

@@ -23,6 +23,8 @@ packages=(
   libeigen3-dev           # only the benchmarks' libigl peers (targets igl_peer, igl_truth_peer) include it
   clang libclang-rt-14-dev  # libFuzzer targets
   slurm-wlm munge         # tests/batch/test_batch_slurm.sh runs a batch as a Slurm job array (docs/batch.md)
+  libmicrohttpd-dev curl  # panelize studio's web server (docs/studio.md); its API test talks to it with curl
+  chromium                # the studio's browser test drives it headless (playwright-core from npm, at build time)
 )
 
 missing=()
