@@ -453,8 +453,8 @@ static double reachable_strain(const pl_segmenter *seg, int32_t *panels)
 static void write_sound_instead(pl_segmenter *seg, const char *why, pz_ctx *ctx)
 {
     int32_t best = reachable_rung(seg);
-    if (seg->segment->goals_met || best < 0 || !(seg->rungs[best].max_strain > seg->goals.goals.max_strain) ||
-        !seg->rungs[best].layout)
+    if ((seg->segment && seg->segment->goals_met) || best < 0 ||
+        !(seg->rungs[best].max_strain > seg->goals.goals.max_strain) || !seg->rungs[best].layout)
         return;
     ladder_rung *rung = seg->rungs + best;
     pz_note(ctx, "run: S = %g cannot be met with sound pieces (%s); the layout made for S = %g (%d panels) is written "
@@ -533,14 +533,11 @@ static pz_status solve_out_of_reach(pl_segmenter *seg, pz_mesh *garment, const p
     }
     *handled = 1;
     seg->probe_panels = probe_panels;
-    seg->segment = calloc(1, sizeof *seg->segment); /* the probe's place: replaced by the rung's layout */
-    if (!seg->segment)
-        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
     char why[96];
     snprintf(why, sizeof why, "its layout stopped at %d panels", (int)probe_panels);
-    write_sound_instead(seg, why, ctx);
+    write_sound_instead(seg, why, ctx); /* the reachable rung kept its layout: it met its goals at the run's C */
     seg->ladder_ms = pz_elapsed_ms(start, pz_seconds());
-    return PZ_OK;
+    return seg->segment ? PZ_OK : pz_error(ctx, PZ_ERR_INTERNAL, "run: the reachable setting's layout was not kept");
 }
 
 pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choice *choice, pz_ctx *ctx)
@@ -598,7 +595,7 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         }
         if (status == PZ_OK)
             status = keep_or_restore_original(seg, garment, ctx);
-        if (status == PZ_OK)
+        if (status == PZ_OK && !handled)
             pz_note(ctx, "run: %d looser settings laid out first in %.0f ms (at most %d panels); this layout: %d panels%s",
                     (int)seg->rung_count, seg->ladder_ms, (int)seg->seed_panels, (int)seg->segment->panel_count,
                     seg->seeded ? ", seeded with their cuts (its own layout had fewer)" : "");
