@@ -468,7 +468,7 @@ static void write_sound_instead(pl_segmenter *seg, const char *why, pz_ctx *ctx)
     /* The written layout's own symmetry decision (exact mirror pieces, the report). */
     seg->goals.symmetry_decided = 1;
     seg->goals.symmetry_used = rung->mirrored;
-    seg->truing_dropped |= rung->untrued; /* flattened as its verdict accepted it */
+    seg->truing_dropped = rung->untrued; /* flattened as its verdict accepted it (trued or not) */
 }
 
 /*
