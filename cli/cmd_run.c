@@ -294,7 +294,13 @@ pz_status pz_cli_run(const pz_cli_args *args, pz_ctx *ctx)
     pz_cli_progress_end(ctx);
     /* --strict: a pattern that misses its goals is a failure for scripts, once its files are written. */
     if (status == PZ_OK && pz_cli_value(args, PZ_CLI_OPT_STRICT) && !result->verdict.goals_met) {
-        pz_error(ctx, PZ_ERR_USAGE, "run: goals not met (--strict): %s", result->verdict.reasons);
+        /* The S that can be met first (issue 15: the one figure a script can act on), then the panels. */
+        char reachable[160] = "";
+        if (result->looser_reachable_strain > options.goals.max_strain)
+            snprintf(reachable, sizeof reachable, "S = %g cannot be met here, S = %g can (%d panels%s); ",
+                     options.goals.max_strain, result->looser_reachable_strain, (int)result->looser_reachable_panels,
+                     result->looser_written_strain > 0 ? ", its layout written" : "");
+        pz_error(ctx, PZ_ERR_USAGE, "run: goals not met (--strict): %s%s", reachable, result->verdict.reasons);
         status = PZ_CLI_GOALS_NOT_MET;
     }
     pz_result_free(&result);

@@ -104,6 +104,11 @@ enum class AccessorUse {
 std::vector<double> read_accessor(const tinygltf::Model &model, int index, AccessorUse use, int components,
                                   uint64_t byte_budget, const std::string &what);
 
+/* An index accessor (scalar integers) as 32-bit values, 4 bytes each instead of 8 (read_accessor's doubles): a
+ * signed value below 0 comes out past 2^31, which the caller's range check refuses. */
+std::vector<uint32_t> read_index_accessor(const tinygltf::Model &model, int index, uint64_t byte_budget,
+                                          const std::string &what);
+
 /* The element count of accessor `index`, 0 when there is no such accessor. */
 uint64_t accessor_count(const tinygltf::Model &model, int index);
 

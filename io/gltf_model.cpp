@@ -418,8 +418,20 @@ ViewSpan buffer_view_span(const tinygltf::Model &model, int view_index, const st
 }
 
 /* Applies a sparse accessor's substitutions (spec 3.6.2.3) to `values` (count x components). */
+/* A component as T: doubles as read; 32-bit indices with what no index can be (negative, fractional or past
+ * 2^32 - 1) as UINT32_MAX, which every range check refuses (a cast would be undefined behaviour). */
+template <typename T> T component_as(double value)
+{
+    return (T)value;
+}
+template <> uint32_t component_as<uint32_t>(double value)
+{
+    return value >= 0 && value < 4294967295.0 && value == std::floor(value) ? (uint32_t)value : UINT32_MAX;
+}
+
+template <typename T>
 void apply_sparse(const tinygltf::Model &model, const tinygltf::Accessor &accessor, int components,
-                  uint64_t element_size, bool normalized, std::vector<double> &values, const std::string &what)
+                  uint64_t element_size, bool normalized, std::vector<T> &values, const std::string &what)
 {
     const auto &sparse = accessor.sparse;
     if (sparse.count <= 0 || (uint64_t)sparse.count > accessor.count)
@@ -448,14 +460,14 @@ void apply_sparse(const tinygltf::Model &model, const tinygltf::Accessor &access
         const unsigned char *element = value_span.data + value_offset + k * element_size;
         for (int c = 0; c < components; ++c)
             values[(uint64_t)target * components + c] =
-                read_component(element + c * component_bytes, accessor.componentType, normalized);
+                component_as<T>(read_component(element + c * component_bytes, accessor.componentType, normalized));
     }
 }
 
-} // namespace
-
-std::vector<double> read_accessor(const tinygltf::Model &model, int index, AccessorUse use, int components,
-                                  uint64_t byte_budget, const std::string &what)
+/* The accessor's values as T (double; uint32_t for indices, which the range checks then bound). */
+template <typename T>
+std::vector<T> read_accessor_as(const tinygltf::Model &model, int index, AccessorUse use, int components,
+                                uint64_t byte_budget, const std::string &what)
 {
     if (index < 0 || (size_t)index >= model.accessors.size())
         fail_data(what + ": accessor " + std::to_string(index) + " does not exist");
@@ -480,7 +492,7 @@ std::vector<double> read_accessor(const tinygltf::Model &model, int index, Acces
     uint64_t component_bytes = component_size(ct);
     uint64_t element_size = component_bytes * (uint64_t)components;
     uint64_t count = accessor.count;
-    std::vector<double> values;
+    std::vector<T> values;
     if (accessor.bufferView >= 0) {
         ViewSpan span = buffer_view_span(model, accessor.bufferView, what);
         uint64_t stride = span.stride ? span.stride : element_size;
@@ -496,16 +508,32 @@ std::vector<double> read_accessor(const tinygltf::Model &model, int index, Acces
         const unsigned char *base = span.data + accessor.byteOffset;
         for (uint64_t i = 0; i < count; ++i)
             for (int c = 0; c < components; ++c)
-                values[i * components + c] = read_component(base + i * stride + c * component_bytes, ct, normalized);
+                values[i * components + c] =
+                    component_as<T>(read_component(base + i * stride + c * component_bytes, ct, normalized));
     } else {
         if (count > byte_budget)
             fail_data(what + ": accessor " + std::to_string(index) + " declares " + std::to_string(count) +
                       " elements without data");
-        values.assign(count * (uint64_t)components, 0.0);
+        values.assign(count * (uint64_t)components, T());
     }
     if (accessor.sparse.isSparse)
         apply_sparse(model, accessor, components, element_size, normalized, values, what);
     return values;
+}
+
+} // namespace
+
+std::vector<double> read_accessor(const tinygltf::Model &model, int index, AccessorUse use, int components,
+                                  uint64_t byte_budget, const std::string &what)
+{
+    return read_accessor_as<double>(model, index, use, components, byte_budget, what);
+}
+
+std::vector<uint32_t> read_index_accessor(const tinygltf::Model &model, int index, uint64_t byte_budget,
+                                          const std::string &what)
+{
+    /* A signed component below 0 wraps past any vertex count: the caller's range check refuses it. */
+    return read_accessor_as<uint32_t>(model, index, AccessorUse::Index, 1, byte_budget, what);
 }
 
 uint64_t accessor_count(const tinygltf::Model &model, int index)

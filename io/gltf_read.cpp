@@ -99,7 +99,7 @@ struct PrimitivePlan {
 struct Gathered {
     std::vector<double> positions;             /* vertex_count x 3 */
     std::vector<std::vector<double>> poses;    /* pose_count x (vertex_count x 3) */
-    std::vector<int32_t> faces;                /* face_count x 3 */
+    std::vector<uint32_t> faces;               /* face_count x 3 (vertex indices below 2^31) */
     std::vector<int32_t> face_labels;          /* face_count */
     std::vector<double> corner_uv_values;      /* face_count x 3 x 2, glTF values already flipped */
     bool uvs_present = false;
@@ -108,6 +108,12 @@ struct Gathered {
     std::vector<char> label_named;
     bool labelled = false;
 };
+
+/* Frees a vector's memory now (clear() keeps the capacity). */
+template <typename T> void release(std::vector<T> &values)
+{
+    std::vector<T>().swap(values);
+}
 
 class Reader {
 public:
@@ -146,7 +152,7 @@ private:
     int skipped_primitives_ = 0;
     bool from_panelize_ = false;
     /* Original index of every gathered face, from pzFaceIds; usable only when every primitive had them. */
-    std::vector<double> face_ids_;
+    std::vector<uint32_t> face_ids_;
     bool face_ids_complete_ = true;
     /* label of primitive p of mesh m: plans_[m][p] */
     std::vector<std::vector<PrimitivePlan>> plans_;
@@ -380,23 +386,36 @@ private:
         size_t face_count = face_ids_.size();
         std::vector<uint32_t> source(face_count, UINT32_MAX);
         for (size_t f = 0; f < face_count; ++f) {
-            double id = face_ids_[f];
-            if (!(id >= 0 && id < (double)face_count) || source[(size_t)id] != UINT32_MAX)
+            uint32_t id = face_ids_[f];
+            if (id >= face_count || source[id] != UINT32_MAX)
                 return;
-            source[(size_t)id] = (uint32_t)f;
+            source[id] = (uint32_t)f;
         }
+        release(face_ids_);
+        /* One array at a time, each old one freed before the next is copied. */
         Gathered &g = gathered_;
-        std::vector<int32_t> faces(g.faces.size()), labels(g.face_labels.size());
-        std::vector<double> uv_values(g.corner_uv_values.size());
-        for (size_t f = 0; f < face_count; ++f) {
-            size_t from = source[f];
-            std::copy_n(&g.faces[3 * from], 3, &faces[3 * f]);
-            std::copy_n(&g.corner_uv_values[6 * from], 6, &uv_values[6 * f]);
-            labels[f] = g.face_labels[from];
-        }
-        g.faces.swap(faces);
-        g.face_labels.swap(labels);
-        g.corner_uv_values.swap(uv_values);
+        permute(g.faces, source, 3);
+        permute(g.face_labels, source, 1);
+        permute(g.corner_uv_values, source, 6);
+    }
+
+    /* values (width per face; may be empty) in the order source gives: face f is the old face source[f]. */
+    template <typename T> static void permute(std::vector<T> &values, const std::vector<uint32_t> &source, size_t width)
+    {
+        if (values.empty())
+            return;
+        std::vector<T> ordered(values.size());
+        for (size_t f = 0; f < source.size(); ++f)
+            std::copy_n(&values[width * source[f]], width, &ordered[width * f]);
+        values.swap(ordered);
+    }
+
+    /* Reserves room for `more` elements: exactly the first time, at least a quarter more after. */
+    template <typename T> static void grow(std::vector<T> &values, size_t more)
+    {
+        size_t needed = values.size() + more;
+        if (needed > values.capacity())
+            values.reserve(std::max(needed, values.capacity() + values.capacity() / 4));
     }
 
     /* Reads the pzFaceIds accessor of a panelize primitive, or marks the ids incomplete. */
@@ -409,8 +428,8 @@ private:
             face_ids_complete_ = false;
             return;
         }
-        std::vector<double> ids = read_accessor(model_, primitive.extras.Get(kFaceIdsExtra).Get<int>(),
-                                                AccessorUse::Index, 1, byte_budget_, what + " " + kFaceIdsExtra);
+        std::vector<uint32_t> ids = read_index_accessor(model_, primitive.extras.Get(kFaceIdsExtra).Get<int>(),
+                                                        byte_budget_, what + " " + kFaceIdsExtra);
         if (ids.size() != triangle_count)
             fail_data(what + ": " + kFaceIdsExtra + " and the triangles differ in count");
         face_ids_.insert(face_ids_.end(), ids.begin(), ids.end());
@@ -492,15 +511,12 @@ private:
     {
         std::vector<uint32_t> order;
         if (primitive.indices >= 0) {
-            std::vector<double> indices =
-                read_accessor(model_, primitive.indices, AccessorUse::Index, 1, byte_budget_, what + " indices");
-            order.resize(indices.size());
-            for (size_t i = 0; i < indices.size(); ++i) {
-                if (!(indices[i] >= 0 && indices[i] < (double)row_count))
-                    fail_data(what + ": index " + std::to_string((int64_t)indices[i]) + " out of range (" +
-                              std::to_string(row_count) + " vertices)");
-                order[i] = (uint32_t)indices[i];
-            }
+            order = read_index_accessor(model_, primitive.indices, byte_budget_, what + " indices");
+            for (uint32_t index : order)
+                if (index >= row_count)
+                    fail_data(what + ": index " + (index == UINT32_MAX ? std::string("below 0 or past 2^32") :
+                                                   std::to_string(index)) +
+                              " out of range (" + std::to_string(row_count) + " vertices)");
         } else {
             order.resize(row_count);
             std::iota(order.begin(), order.end(), 0u);
@@ -580,6 +596,9 @@ private:
                 matrix_apply(instance.world, &target_rows[(size_t)t][r * 3], &gathered_.poses[(size_t)t][vertex * 3]);
         }
 
+        std::vector<double>().swap(rows); /* applied: freed before the triangles are read */
+        std::vector<std::vector<double>>().swap(target_rows);
+
         std::vector<double> texcoords;
         auto texcoord = primitive.attributes.find("TEXCOORD_0");
         if (texcoord != primitive.attributes.end()) {
@@ -589,27 +608,42 @@ private:
                 fail_data(what + ": TEXCOORD_0 and POSITION differ in count");
             gathered_.uvs_present = true;
         } else {
-            gathered_.uvs_missing = true;
+            gathered_.uvs_missing = true; /* the UVs are dropped: none kept from here on */
+            std::vector<double>().swap(gathered_.corner_uv_values);
         }
+        bool keep_uvs = !gathered_.uvs_missing;
 
         std::vector<uint32_t> triangles = primitive_triangles(primitive, row_count, what);
         read_face_ids(primitive, triangles.size() / 3, what);
         bool flip = matrix_determinant3(instance.world) < 0;
         int32_t label = plans_[(size_t)instance.mesh_index][(size_t)primitive_index].label;
+        /* Room for this primitive's faces at once (one primitive: exactly, no doubling), a quarter more when
+         * several primitives grow the arrays in turn. */
+        /* The first primitive's triangles become the faces in place (no second array of them). */
+        bool in_place = gathered_.faces.empty();
+        if (!in_place)
+            grow(gathered_.faces, triangles.size());
+        grow(gathered_.face_labels, triangles.size() / 3);
+        if (keep_uvs)
+            grow(gathered_.corner_uv_values, 2 * triangles.size());
         for (size_t i = 0; i < triangles.size(); i += 3) {
             uint32_t corner_rows[3] = {triangles[i], flip ? triangles[i + 2] : triangles[i + 1],
                                        flip ? triangles[i + 1] : triangles[i + 2]};
-            for (uint32_t row : corner_rows) {
-                gathered_.faces.push_back(row_vertex[row]);
-                if (!texcoords.empty()) {
+            for (int k = 0; k < 3; ++k) {
+                uint32_t row = corner_rows[k], vertex = (uint32_t)row_vertex[row];
+                if (in_place)
+                    triangles[i + (size_t)k] = vertex;
+                else
+                    gathered_.faces.push_back(vertex);
+                if (keep_uvs) {
                     gathered_.corner_uv_values.push_back(texcoords[row * 2]);
                     gathered_.corner_uv_values.push_back(1.0 - texcoords[row * 2 + 1]);
-                } else {
-                    gathered_.corner_uv_values.insert(gathered_.corner_uv_values.end(), {0.0, 0.0});
                 }
             }
             gathered_.face_labels.push_back(label);
         }
+        if (in_place)
+            gathered_.faces.swap(triangles);
     }
 };
 
@@ -617,11 +651,11 @@ private:
  * Gives corners with the same vertex and the same UV value one UV index:
  * sorts the corners by (vertex, u, v). O(C log C).
  */
-void index_corner_uvs(const Gathered &gathered, std::vector<double> &uvs, std::vector<int32_t> &corner_uvs)
+void index_corner_uvs(Gathered &gathered, std::vector<double> &uvs, std::vector<int32_t> &corner_uvs)
 {
     size_t corner_count = gathered.faces.size();
-    /* NaN would break the sort's strict weak order: such a UV reads as 0. */
-    std::vector<double> values(gathered.corner_uv_values);
+    /* NaN would break the sort's strict weak order: such a UV reads as 0 (in place: no copy). */
+    std::vector<double> &values = gathered.corner_uv_values;
     for (double &value : values)
         if (std::isnan(value))
             value = 0.0;
@@ -655,8 +689,9 @@ char *duplicate_cstring(const std::string &text)
     return copy;
 }
 
-/* Moves the gathered arrays into a new pz_mesh (throws bad_alloc; frees on failure). */
-pz_mesh *build_mesh(const Gathered &gathered, pz_ctx *ctx)
+/* Moves the gathered arrays into a new pz_mesh, each freed once copied so that the two never both hold the
+ * whole mesh (throws bad_alloc; frees on failure). */
+pz_mesh *build_mesh(Gathered &gathered, pz_ctx *ctx)
 {
     int32_t vertex_count = (int32_t)(gathered.positions.size() / 3);
     uint64_t face_count = gathered.faces.size() / 3;
@@ -671,7 +706,7 @@ pz_mesh *build_mesh(const Gathered &gathered, pz_ctx *ctx)
         ~Guard() { pz_mesh_free(&mesh); }
     } guard{mesh};
     std::copy(gathered.positions.begin(), gathered.positions.end(), mesh->positions);
-    std::copy(gathered.faces.begin(), gathered.faces.end(), mesh->faces);
+    release(gathered.positions);
 
     if (gathered.uvs_present && !gathered.uvs_missing) {
         std::vector<double> uvs;
@@ -685,6 +720,9 @@ pz_mesh *build_mesh(const Gathered &gathered, pz_ctx *ctx)
         std::copy(corner_uvs.begin(), corner_uvs.end(), mesh->corner_uvs);
         mesh->uv_count = (int32_t)(uvs.size() / 2);
     }
+    release(gathered.corner_uv_values);
+    std::copy(gathered.faces.begin(), gathered.faces.end(), mesh->faces); /* after the UVs: they sort by it */
+    release(gathered.faces);
 
     if (gathered.labelled && !gathered.label_names.empty()) {
         mesh->face_labels = (int32_t *)malloc(face_count * sizeof(int32_t) + 1);
@@ -703,8 +741,10 @@ pz_mesh *build_mesh(const Gathered &gathered, pz_ctx *ctx)
         mesh->poses = (double *)malloc(gathered.poses.size() * pose_size * sizeof(double) + 1);
         if (!mesh->poses)
             throw std::bad_alloc();
-        for (size_t p = 0; p < gathered.poses.size(); ++p)
+        for (size_t p = 0; p < gathered.poses.size(); ++p) {
             std::copy(gathered.poses[p].begin(), gathered.poses[p].end(), mesh->poses + p * pose_size);
+            release(gathered.poses[p]);
+        }
         mesh->pose_count = (int32_t)gathered.poses.size();
     }
     guard.mesh = nullptr;
@@ -715,20 +755,45 @@ pz_mesh *build_mesh(const Gathered &gathered, pz_ctx *ctx)
 
 } // namespace pz_gltf
 
-extern "C" pz_status pz_gltf_read_memory(const unsigned char *data, size_t size, int binary, const char *base_dir,
-                                         const char *name, pz_mesh **out, pz_ctx *ctx)
+/*
+ * The reader's memory (issue 15, docs/reliability.md): tinygltf copies the
+ * binary chunk into its model, so the file's bytes (`owned`) are freed as soon
+ * as it has parsed them, the model as soon as the mesh is gathered, and each
+ * gathered array as soon as the mesh has it.
+ */
+static pz_status read_gltf(const unsigned char *data, size_t size, unsigned char *owned, int binary,
+                           const char *base_dir, const char *name, pz_mesh **out, pz_ctx *ctx)
 {
     *out = nullptr;
     const char *shown = name ? name : "glTF";
-    return pz_gltf::guarded(ctx, shown, [&]() -> pz_status {
+    pz_status status = pz_gltf::guarded(ctx, shown, [&]() -> pz_status {
         std::string label(shown);
-        tinygltf::Model model;
-        pz_gltf::load_model(model, data, size, binary, base_dir, label);
-        uint64_t byte_budget = size;
-        for (const tinygltf::Buffer &buffer : model.buffers)
-            byte_budget += buffer.data.size();
-        pz_gltf::Gathered gathered = pz_gltf::Reader(model, label, byte_budget, ctx).run();
+        pz_gltf::Gathered gathered;
+        {
+            tinygltf::Model model;
+            pz_gltf::load_model(model, data, size, binary, base_dir, label);
+            free(owned);
+            owned = nullptr;
+            uint64_t byte_budget = size;
+            for (const tinygltf::Buffer &buffer : model.buffers)
+                byte_budget += buffer.data.size();
+            gathered = pz_gltf::Reader(model, label, byte_budget, ctx).run();
+        }
         *out = pz_gltf::build_mesh(gathered, ctx);
         return PZ_OK;
     });
+    free(owned);
+    return status;
+}
+
+extern "C" pz_status pz_gltf_read_memory(const unsigned char *data, size_t size, int binary, const char *base_dir,
+                                         const char *name, pz_mesh **out, pz_ctx *ctx)
+{
+    return read_gltf(data, size, nullptr, binary, base_dir, name, out, ctx);
+}
+
+extern "C" pz_status pz_gltf_read_owned(unsigned char *data, size_t size, int binary, const char *base_dir,
+                                        const char *name, pz_mesh **out, pz_ctx *ctx)
+{
+    return read_gltf(data, size, data, binary, base_dir, name, out, ctx);
 }

@@ -157,25 +157,32 @@ static char *io_directory_of(const char *path)
     return directory;
 }
 
-static pz_status io_parse(pz_format format, const unsigned char *data, size_t size, const char *path,
-                          pz_mesh **out, pz_ctx *ctx)
+/* Parses the file's bytes and frees them (glTF: as soon as tinygltf has its own copy, pz_gltf_read_owned). */
+static pz_status io_parse(pz_format format, unsigned char *data, size_t size, const char *path, pz_mesh **out,
+                          pz_ctx *ctx)
 {
+    pz_status status;
     switch (format) {
-    case PZ_FORMAT_OBJ: return pz_obj_read_memory((const char *)data, size, path, out, ctx);
-    case PZ_FORMAT_PLY: return pz_ply_read_memory(data, size, path, out, ctx);
-    case PZ_FORMAT_OFF: return pz_off_read_memory((const char *)data, size, path, out, ctx);
-    case PZ_FORMAT_GLB: return pz_gltf_read_memory(data, size, 1, NULL, path, out, ctx);
+    case PZ_FORMAT_OBJ: status = pz_obj_read_memory((const char *)data, size, path, out, ctx); break;
+    case PZ_FORMAT_PLY: status = pz_ply_read_memory(data, size, path, out, ctx); break;
+    case PZ_FORMAT_OFF: status = pz_off_read_memory((const char *)data, size, path, out, ctx); break;
+    case PZ_FORMAT_GLB: return pz_gltf_read_owned(data, size, 1, NULL, path, out, ctx);
     case PZ_FORMAT_GLTF: {
         char *directory = io_directory_of(path);
-        if (!directory)
+        if (!directory) {
+            free(data);
             return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", path);
-        pz_status status = pz_gltf_read_memory(data, size, 0, directory, path, out, ctx);
+        }
+        status = pz_gltf_read_owned(data, size, 0, directory, path, out, ctx);
         free(directory);
         return status;
     }
-    case PZ_FORMAT_UNKNOWN: break;
+    default:
+        status = pz_error(ctx, PZ_ERR_DATA, "%s: unknown format (expected .obj, .ply, .off, .glb, .gltf)", path);
+        break;
     }
-    return pz_error(ctx, PZ_ERR_DATA, "%s: unknown format (expected .obj, .ply, .off, .glb, .gltf)", path);
+    free(data);
+    return status;
 }
 
 pz_status pz_mesh_read(const char *path, pz_mesh **out, pz_ctx *ctx)
@@ -189,9 +196,7 @@ pz_status pz_mesh_read(const char *path, pz_mesh **out, pz_ctx *ctx)
     pz_status status = io_read_whole_file(path, format, &data, &size, ctx);
     if (status)
         return status;
-    status = io_parse(format, data, size, path, out, ctx);
-    free(data);
-    return status;
+    return io_parse(format, data, size, path, out, ctx); /* frees data */
 }
 
 /* PZ_OK when `pose` has the connectivity of `rest`; otherwise the mismatch naming both files. */

@@ -67,6 +67,10 @@ pz_status pz_off_read_memory(const char *data, size_t size, const char *name, pz
 /** glTF 2.0 from memory: binary GLB (`binary` = 1) or JSON (base_dir for external buffers; may be NULL). */
 pz_status pz_gltf_read_memory(const unsigned char *data, size_t size, int binary, const char *base_dir,
                               const char *name, pz_mesh **out, pz_ctx *ctx);
+/** The same, taking `data` (malloc'd, size + 1 bytes or more): freed as soon as tinygltf has parsed it (its model
+ *  holds its own copy of the binary chunk), whatever the outcome, so that the two never stay side by side. */
+pz_status pz_gltf_read_owned(unsigned char *data, size_t size, int binary, const char *base_dir, const char *name,
+                             pz_mesh **out, pz_ctx *ctx);
 
 /**
  * Loads a rest mesh plus extra pose files with identical connectivity: the

@@ -266,8 +266,8 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
             snprintf(message, sizeof message, "%d panels", (int)result->pattern->panel_count);
             pl_stage(ctx, "flatten", 0.7, 0.9, message);
             status = pl_flatten_pattern(options, result->pattern, run->garment.mesh->unit_scale, result->grain,
-                                        strain_limit > 0 ? pl_segmenter_flatten_strain(run->segmenter, strain_limit)
-                                                         : 0,
+                                        run->segmenter ? pl_segmenter_flatten_strain(run->segmenter, strain_limit)
+                                                       : strain_limit,
                                         result->uv, &result->backend, ctx);
         }
         if (status == PZ_OK && run->segmenter) /* mirror pieces exact before the verdict judges them */

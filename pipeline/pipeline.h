@@ -302,6 +302,10 @@ typedef struct pz_result {
     int32_t looser_reachable_panels; /* that layout's panels */
     double looser_written_strain;    /* > 0: the run's S was out of reach with sound pieces, and the layout of this
                                         looser S (the reachable one) is the one written (docs/run.md) */
+    int looser_direct;               /* 1: the run's S was shown out of reach (the outlook, then a layout that stopped
+                                        with looser_probe_panels panels) and the looser settings were laid out each
+                                        on its own from the outlook's suggestion up (docs/run.md, "Impossible goals") */
+    int32_t looser_probe_panels;
     pz_strain_outlook outlook;       /* can S be met: taken before the segmentation */
     pz_segment_tradeoff tradeoff;    /* the final layout's merge sequence (count 0: not measured): the pieces each
                                         strain goal needs (pz_tradeoff_pieces; docs/run.md, "The trade-off") */

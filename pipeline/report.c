@@ -619,6 +619,10 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
             ok &= add_plain_number(ladder, "reachable_panels", result->looser_reachable_panels);
             if (result->looser_written_strain > 0)
                 ok &= add_plain_number(ladder, "written_strain", result->looser_written_strain);
+            if (result->looser_direct) {
+                ok &= cJSON_AddBoolToObject(ladder, "direct", 1) != NULL;
+                ok &= add_plain_number(ladder, "probe_panels", result->looser_probe_panels);
+            }
         }
         cJSON *timings = cJSON_AddObjectToObject(ladder, "timings_ms");
         ok &= timings && add_plain_number(timings, "total", pz_round(result->timings.looser_goals, 3));

@@ -42,6 +42,8 @@ typedef struct goal_setting {
     int symmetry_decided, symmetry_used;
     int plane_dropped;               /* the joint flattening rejected the mirrored layout (drop_rejected_plane) */
     int32_t pieces_with, pieces_without;
+    int probe;                       /* 1: the layout stops once S shows out of reach (pz_segment stop_when_unsound) */
+    int untrued;                     /* 1: its verdict rounds accepted the layout on its untrued seams */
 } goal_setting;
 
 static void goal_setting_clear(goal_setting *goals)
@@ -60,6 +62,9 @@ typedef struct ladder_rung {
     int32_t panels;
     int goals_met;       /* its layout met every goal of its setting (the reachable S, pl_segmenter_report) */
     int mirrored;        /* its layout was made on one half and mirrored (its cuts are symmetric) */
+    int untrued;         /* its verdict accepted it untrued: written, it is flattened untrued too */
+    pz_segment_result *layout; /* its final layout when it met every goal at the run's C (written when the run's
+                                  S is out of reach: write_sound_instead), else NULL */
 } ladder_rung;
 
 struct pl_segmenter {
@@ -97,6 +102,8 @@ struct pl_segmenter {
     int32_t rung_count, rung_capacity;
     int32_t seed_panels;                /* the most panels among the parent settings */
     double written_looser_strain;       /* > 0: the run's S was out of reach; the layout of this S is written */
+    int direct;                         /* 1: settings are laid out on their own, no parents (solve_out_of_reach) */
+    int32_t probe_panels;               /* > 0: the probe of the run's S stopped with this many panels */
     double ladder_ms;
 };
 
@@ -158,6 +165,9 @@ static pz_status solve_setting(pl_segmenter *seg, pz_mesh *garment, const pz_top
 static pz_status ladder_parents(pl_segmenter *seg, pz_mesh *garment, const pz_topology *topology,
                                 const pz_sketch *sketch, double max_strain, int32_t max_corners, uint8_t **seeds,
                                 int32_t *most_panels, int *mirrored, pz_ctx *ctx);
+static pz_status ladder_cuts(pl_segmenter *seg, pz_mesh *garment, const pz_topology *topology, const pz_sketch *sketch,
+                             double max_strain, int32_t max_corners, int32_t *index, pz_ctx *ctx);
+static double ladder_strain_above(double strain, double default_strain);
 
 
 /* The garment as it was before the first truing (each verdict round segments the original surface). */
@@ -201,6 +211,7 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     options.user = progress;
     options.vetoed = goals->vetoed;
     options.vetoed_count = goals->vetoed_count;
+    options.stop_when_unsound = goals->probe;
     /* The plane the pipeline detected (or was given) once: the segmentation uses it as given, or none. */
     int mirrored = seg->plane && goals->symmetry_used;
     options.symmetry = mirrored ? PZ_SYMMETRY_PLANE : PZ_SYMMETRY_OFF;
@@ -412,59 +423,124 @@ static pz_status truing_added_corners(const pl_segmenter *seg, const pz_mesh *ga
     return PZ_OK;
 }
 
-/*
- * The strictest looser setting whose layout met every goal at the run's C
- * (its S; -1: none) and its panels.
- */
-static double reachable_strain(const pl_segmenter *seg, int32_t *panels)
+/* The strictest looser setting whose layout met every goal at the run's C (its rung; -1: none). */
+static int32_t reachable_rung(const pl_segmenter *seg)
 {
-    double best = -1;
-    *panels = 0;
+    int32_t best = -1;
     for (int32_t i = 0; i < seg->rung_count; ++i) {
         const ladder_rung *rung = seg->rungs + i;
         if (rung->goals_met && rung->max_corners == seg->goals.goals.max_corners &&
-            (best < 0 || rung->max_strain < best))
-            best = rung->max_strain, *panels = rung->panels;
+            (best < 0 || rung->max_strain < seg->rungs[best].max_strain))
+            best = i;
     }
     return best;
+}
+
+/* The strictest looser setting whose layout met every goal at the run's C (its S; -1: none) and its panels. */
+static double reachable_strain(const pl_segmenter *seg, int32_t *panels)
+{
+    int32_t best = reachable_rung(seg);
+    *panels = best >= 0 ? seg->rungs[best].panels : 0;
+    return best >= 0 ? seg->rungs[best].max_strain : -1;
 }
 
 /*
  * Impossible goals end with the best sound layout (issue 15): when the
  * run's own layout could not meet its S with sound pieces (slivers merged,
- * best effort) and a looser S of the ladder could, that setting's layout
- * replaces it: a few sound pieces a pattern maker can cut, not dozens that
- * still miss S. It is made again (the ladder keeps only its cuts; its
- * parents are memoised), judged against the run's own goals by the final
- * verdict, which names both S.
+ * best effort, or a probe that stopped: solve_out_of_reach) and a looser S
+ * of the ladder could, that setting's layout replaces it: a few sound pieces
+ * a pattern maker can cut, not dozens that still miss S. The rung kept its
+ * final layout (ladder_cuts); the final verdict judges it against the run's
+ * own goals and names both S. The note says why (`why`, after the S).
  */
-static pz_status write_sound_instead(pl_segmenter *seg, pz_mesh *garment, const pz_topology *topology,
-                                     const pz_sketch *sketch, pz_ctx *ctx)
+static void write_sound_instead(pl_segmenter *seg, const char *why, pz_ctx *ctx)
 {
-    int32_t panels = 0;
-    double strain = reachable_strain(seg, &panels);
-    if (seg->segment->goals_met || !(strain > seg->goals.goals.max_strain))
+    int32_t best = reachable_rung(seg);
+    if ((seg->segment && seg->segment->goals_met) || best < 0 ||
+        !(seg->rungs[best].max_strain > seg->goals.goals.max_strain) || !seg->rungs[best].layout)
+        return;
+    ladder_rung *rung = seg->rungs + best;
+    pz_note(ctx, "run: S = %g cannot be met with sound pieces (%s); the layout made for S = %g (%d panels) is written "
+            "instead, flattened for that S", seg->goals.goals.max_strain, why, rung->max_strain,
+            (int)rung->layout->panel_count);
+    pz_segment_result_free(&seg->segment);
+    seg->segment = rung->layout;
+    rung->layout = NULL;
+    seg->segment->goals_met = 0; /* not the run's goals: the final verdict judges them */
+    seg->written_looser_strain = rung->max_strain;
+    /* The written layout's own symmetry decision (exact mirror pieces, the report). */
+    seg->goals.symmetry_decided = 1;
+    seg->goals.symmetry_used = rung->mirrored;
+    seg->truing_dropped = rung->untrued; /* flattened as its verdict accepted it (trued or not) */
+}
+
+/*
+ * Impossible goals end quickly (issue 15, docs/run.md "Impossible goals").
+ * When the outlook (pl_strain_outlook) finds S out of reach with sound
+ * pieces, the run's own S is probed with one layout (no plane, no ladder)
+ * that stops as soon as it shows the same (pz_segment_options
+ * stop_when_unsound). Confirmed, the ladder is not climbed down from the
+ * defaults: the settings from the outlook's suggestion up (at the run's C)
+ * are laid out each on its own, without parents, until one meets every goal,
+ * and that layout is written (write_sound_instead). *handled 0: the probe
+ * met S (the outlook was wrong), or no setting up to the defaults met its
+ * goals; the run then goes the ladder's way as before.
+ */
+static pz_status solve_out_of_reach(pl_segmenter *seg, pz_mesh *garment, const pz_topology *topology,
+                                    const pz_sketch *sketch, int *handled, pz_ctx *ctx)
+{
+    *handled = 0;
+    const pz_strain_outlook *outlook = &seg->outlook;
+    double strain = seg->goals.goals.max_strain, defaults = seg->defaults.max_strain;
+    if (!outlook->measured || outlook->reachable || !(outlook->suggested_strain > strain) || !(strain < defaults))
         return PZ_OK;
-    goal_setting sound_goals;
-    memset(&sound_goals, 0, sizeof sound_goals);
-    pz_segment_result *sound = NULL;
-    int seeded = 0;
-    int32_t most_panels = 0;
-    pz_status status = solve_setting(seg, garment, topology, sketch, strain, seg->goals.goals.max_corners, &sound_goals,
-                                     &sound, &seeded, &most_panels, ctx);
-    if (status == PZ_OK && sound->goals_met) {
-        pz_note(ctx, "run: S = %g cannot be met with sound pieces (%d panels, best effort); the layout made for "
-                "S = %g (%d panels) is written instead, flattened for that S", seg->goals.goals.max_strain,
-                (int)seg->segment->panel_count, strain, (int)sound->panel_count);
-        pz_segment_result_free(&seg->segment);
-        sound->goals_met = 0; /* not the run's goals: the final verdict judges them */
-        seg->segment = sound;
-        sound = NULL;
-        seg->written_looser_strain = strain;
+    double start = pz_seconds();
+    goal_setting probe;
+    memset(&probe, 0, sizeof probe);
+    set_goals(seg, &probe, strain, seg->goals.goals.max_corners);
+    probe.symmetry_decided = 1;
+    probe.probe = 1;
+    pz_ctx quiet;
+    pz_ctx_quiet(ctx, &quiet);
+    pz_segment_result *layout = NULL;
+    pz_status status = keep_or_restore_original(seg, garment, ctx);
+    if (status == PZ_OK)
+        status = segment_once(seg, garment, topology, sketch, &probe, NULL, &quiet, &layout, ctx);
+    goal_setting_clear(&probe);
+    int out_of_reach = status == PZ_OK && !layout->goals_met && layout->stopped_unsound;
+    int32_t probe_panels = layout ? layout->panel_count : 0;
+    pz_segment_result_free(&layout);
+    if (status != PZ_OK || !out_of_reach)
+        return status;
+    pz_note(ctx, "run: S = %g: the layout stopped at %d panels, one over S already too small or narrow to split, "
+            "or over S once every split was made (%.0f ms)", strain, (int)probe_panels, pz_elapsed_ms(start, pz_seconds()));
+    /* The settings on the ladder's grid from the outlook's suggestion (rounded up to 0.01) up to the defaults. */
+    seg->direct = 1;
+    double rung = fmin(outlook->suggested_strain, defaults);
+    for (int met = 0; status == PZ_OK && !met;) {
+        int32_t index = -1;
+        status = ladder_cuts(seg, garment, topology, sketch, rung, seg->goals.goals.max_corners, &index, ctx);
+        met = status == PZ_OK && seg->rungs[index].goals_met;
+        if (met || rung >= defaults)
+            break;
+        rung = ladder_strain_above(rung, defaults);
     }
-    pz_segment_result_free(&sound);
-    goal_setting_clear(&sound_goals);
-    return status;
+    seg->direct = 0;
+    if (status != PZ_OK || reachable_rung(seg) < 0) {
+        for (int32_t i = 0; i < seg->rung_count; ++i) { /* the ladder's way makes its own rungs, with parents */
+            free(seg->rungs[i].cuts);
+            pz_segment_result_free(&seg->rungs[i].layout);
+        }
+        seg->rung_count = 0;
+        return status;
+    }
+    *handled = 1;
+    seg->probe_panels = probe_panels;
+    char why[96];
+    snprintf(why, sizeof why, "its layout stopped at %d panels", (int)probe_panels);
+    write_sound_instead(seg, why, ctx); /* the reachable rung kept its layout: it met its goals at the run's C */
+    seg->ladder_ms = pz_elapsed_ms(start, pz_seconds());
+    return seg->segment ? PZ_OK : pz_error(ctx, PZ_ERR_INTERNAL, "run: the reachable setting's layout was not kept");
 }
 
 pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choice *choice, pz_ctx *ctx)
@@ -509,13 +585,20 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         seg->ladder_done = 1;
         seg->field_singularities = seg->field->singularity_count;
         pz_segment_result_free(&seg->segment);
-        status = solve_setting(seg, garment, topology, sketch, seg->goals.goals.max_strain, seg->goals.goals.max_corners,
-                               &seg->goals, &seg->segment, &seg->seeded, &seg->seed_panels, ctx);
-        if (status == PZ_OK)
-            status = write_sound_instead(seg, garment, topology, sketch, ctx);
+        int handled = 0;
+        status = solve_out_of_reach(seg, garment, topology, sketch, &handled, ctx);
+        if (status == PZ_OK && !handled)
+            status = solve_setting(seg, garment, topology, sketch, seg->goals.goals.max_strain,
+                                   seg->goals.goals.max_corners, &seg->goals, &seg->segment, &seg->seeded,
+                                   &seg->seed_panels, ctx);
+        if (status == PZ_OK && !handled) {
+            char why[96];
+            snprintf(why, sizeof why, "%d panels, best effort", (int)seg->segment->panel_count);
+            write_sound_instead(seg, why, ctx);
+        }
         if (status == PZ_OK)
             status = keep_or_restore_original(seg, garment, ctx);
-        if (status == PZ_OK)
+        if (status == PZ_OK && !handled)
             pz_note(ctx, "run: %d looser settings laid out first in %.0f ms (at most %d panels); this layout: %d panels%s",
                     (int)seg->rung_count, seg->ladder_ms, (int)seg->seed_panels, (int)seg->segment->panel_count,
                     seg->seeded ? ", seeded with their cuts (its own layout had fewer)" : "");
@@ -677,6 +760,7 @@ static pz_status verdict_rounds(pl_segmenter *seg, pz_mesh *garment, const pz_to
         if (retry) {
             verdict_state_restore(goals, &before);
             truing = 0;
+            goals->untrued = 1;
             if (goals == &seg->goals)
                 seg->truing_dropped = 1; /* the run's own setting: its pattern is flattened untrued too */
         }
@@ -763,16 +847,20 @@ static pz_status ladder_cuts(pl_segmenter *seg, pz_mesh *garment, const pz_topol
         rung->panels = segment->panel_count;
         rung->goals_met = segment->goals_met;
         rung->mirrored = seg->plane && goals.symmetry_used;
+        rung->layout = NULL;
+        rung->untrued = goals.untrued;
+        if (segment->goals_met && max_corners == seg->goals.goals.max_corners)
+            rung->layout = segment, segment = NULL; /* kept: written when the run's S is out of reach */
         rung->cuts = malloc((size_t)topology->edge_count + 1);
         if (!rung->cuts)
             status = pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
         else {
-            memcpy(rung->cuts, segment->edge_cut, (size_t)topology->edge_count);
+            memcpy(rung->cuts, (rung->layout ? rung->layout : segment)->edge_cut, (size_t)topology->edge_count);
             *index = seg->rung_count++;
-            pz_note(ctx, "run: looser goals S = %g, C = %d: %d panels%s%s, %d verdict rounds, %.0f ms", max_strain,
-                    (int)max_corners, (int)segment->panel_count, seeded ? " (seeded with their looser goals' cuts)" : "",
-                    segment->goals_met ? "" : " (goals not met)", (int)goals.verdict_rounds,
-                    pz_elapsed_ms(start, pz_seconds()));
+            pz_note(ctx, "run: looser goals S = %g, C = %d%s: %d panels%s%s, %d verdict rounds, %.0f ms", max_strain,
+                    (int)max_corners, seg->direct ? " (on its own)" : "", (int)rung->panels,
+                    seeded ? " (seeded with their looser goals' cuts)" : "", rung->goals_met ? "" : " (goals not met)",
+                    (int)goals.verdict_rounds, pz_elapsed_ms(start, pz_seconds()));
         }
     }
     pz_segment_result_free(&segment);
@@ -792,7 +880,7 @@ static pz_status ladder_parents(pl_segmenter *seg, pz_mesh *garment, const pz_to
     double parent_strain[2] = {ladder_strain_above(max_strain, seg->defaults.max_strain), max_strain};
     int32_t parent_corners[2] = {max_corners, max_corners + 1};
     int has_parent[2] = {max_strain < seg->defaults.max_strain, max_corners < seg->defaults.max_corners};
-    if (!has_parent[0] && !has_parent[1])
+    if (seg->direct || (!has_parent[0] && !has_parent[1]))
         return PZ_OK;
     if (!(*seeds = calloc((size_t)topology->edge_count + 1, 1)))
         return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory");
@@ -951,8 +1039,8 @@ pz_status pl_segmenter_exact_mirrors(pl_segmenter *seg, const pz_pattern *patter
     if (!seg->segment || !seg->plane || !seg->goals.symmetry_used || !may_make_exact(seg))
         return PZ_OK;
     int32_t exact = 0, pieces = 0;
-    pz_status status = pl_exact_mirror_pieces(pattern, seg->segment, seg->goals.goals.max_strain, uv, &exact, &pieces,
-                                              ctx);
+    pz_status status = pl_exact_mirror_pieces(pattern, seg->segment, pl_segmenter_flatten_strain(seg, seg->goals.goals.max_strain),
+                                              uv, &exact, &pieces, ctx);
     seg->mirror_pieces = pieces, seg->exact_mirror_pieces = exact;
     if (status == PZ_OK && pieces > 0)
         pz_note(ctx, "run: symmetry: %d of %d mirror pieces made exact%s", (int)exact, (int)pieces,
@@ -1006,8 +1094,10 @@ void pl_segmenter_free(pl_segmenter **segmenter)
         return;
     pz_segment_result_free(&seg->segment);
     goal_setting_clear(&seg->goals);
-    for (int32_t i = 0; i < seg->rung_count; ++i)
+    for (int32_t i = 0; i < seg->rung_count; ++i) {
         free(seg->rungs[i].cuts);
+        pz_segment_result_free(&seg->rungs[i].layout);
+    }
     free(seg->rungs);
     pz_field_free(&seg->field);
     pz_field_free(&seg->mirror_field);
@@ -1051,8 +1141,8 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
      * own S cannot be met (the final verdict names it). */
     result->looser_reachable_strain = reachable_strain(seg, &result->looser_reachable_panels);
     result->looser_written_strain = seg->written_looser_strain;
-    if (seg->written_looser_strain > 0 && result->segment) /* made again: the count of the layout written */
-        result->looser_reachable_panels = result->segment->panel_count;
+    result->looser_direct = seg->probe_panels > 0;
+    result->looser_probe_panels = seg->probe_panels;
     result->timings.field = seg->field_ms;
     result->timings.segment = seg->segment_ms;
     result->timings.looser_goals = seg->ladder_ms;

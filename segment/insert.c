@@ -79,6 +79,23 @@ static int32_t goal_failing_panels(const seg_layout *layout)
     return failing;
 }
 
+/* options->stop_when_unsound: 1 (and the layout marked stopped) when a panel over S is already under a piece-shape
+ * goal or under twice the least piece area (any split of it leaves a piece under that area), or, once the insertion
+ * is done (done = 1), when any panel is over S: no split mends the first with sound pieces, and the removal and
+ * darts never mend the second. */
+static int stop_unsound(seg_layout *layout, int done)
+{
+    if (!layout->options->stop_when_unsound)
+        return 0;
+    for (int32_t p = 0; p < layout->panel_count && !layout->stopped_unsound; ++p) {
+        unsigned failures = seg_panel_failures(layout, p);
+        double share = layout->panel_goals[p].area_share;
+        int unsplittable = (failures & PZ_GOAL_SHAPE) || (share > 0 && share < 2 * layout->goals.min_piece_area);
+        layout->stopped_unsound = (failures & PZ_GOAL_STRAIN) && (done || unsplittable);
+    }
+    return layout->stopped_unsound;
+}
+
 /* ---------------------------------------------------------------- paths */
 
 static pz_status add_path(seg_layout *layout, const pz_trace_path *path, int sketch, pz_ctx *ctx)
@@ -367,7 +384,7 @@ static pz_status insert_greedy(seg_layout *layout, seg_candidate *candidates, in
     for (int round = 0; round < MAX_INSERTIONS_PER_LEVEL && !status; ++round) {
         if ((status = pz_check_cancel(ctx, "segment")) || (status = seg_evaluate_panels(layout, NULL, ctx)))
             break;
-        if (!failing_panels(layout) || !any_helpful(layout, candidates, count))
+        if (!failing_panels(layout) || stop_unsound(layout, 0) || !any_helpful(layout, candidates, count))
             break;
         free(in_paths);
         in_paths = malloc(((size_t)layout->path_count + 1) * sizeof(pz_trace_path));
@@ -747,15 +764,19 @@ pz_status seg_insert_all(seg_layout *layout, pz_segment_result *result, pz_ctx *
     if (!status)
         status = insert_greedy(layout, candidates, count, &inserted, ctx);
     candidates_clear(candidates, count);
-    for (int32_t depth = 0; !status && depth < layout->max_depth && failing_panels(layout) && !budget_reached(layout);
+    for (int32_t depth = 0; !status && depth < layout->max_depth && failing_panels(layout) && !budget_reached(layout) &&
+                            !layout->stopped_unsound;
          ++depth) {
         int32_t more = 0;
         status = recurse_failing(layout, &more, ctx);
         if (!more)
             break;
     }
-    if (!status && goal_failing_panels(layout) && !budget_reached(layout))
+    if (!status && !layout->stopped_unsound && goal_failing_panels(layout) && !budget_reached(layout))
         status = seg_fallback_cuts(layout, &inserted, ctx);
+    if (!status && layout->options->stop_when_unsound && !(status = seg_label_panels(layout, ctx)) &&
+        !(status = seg_evaluate_panels(layout, NULL, ctx)))
+        stop_unsound(layout, 1);
     result->insert_ms = 1e3 * (pz_seconds() - start);
     return status;
 }

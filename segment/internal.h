@@ -106,6 +106,7 @@ typedef struct seg_layout {
     struct seg_goal_scratch **goal_scratch; /* threads: evaluation scratch, created when first needed */
     int32_t evaluation_count;
     int32_t removed_early;    /* segments removed during the insertion (before weak candidates) */
+    int stopped_unsound;      /* options->stop_when_unsound: S shown out of reach with sound pieces (insert.c) */
     int64_t evaluated_faces;  /* faces over all evaluations: the work budget's measure */
     double mean_edge;
     /* ctx->progress: the fraction reported last, and where the current part of the run ends (seg_progress). */

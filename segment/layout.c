@@ -435,7 +435,8 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
     }
     result->inserted_count = layout.path_count;
     result->removed_count = layout.removed_early;
-    if (!status) {
+    result->stopped_unsound = layout.stopped_unsound;
+    if (!status && !layout.stopped_unsound) {
         seg_progress_part(&layout, 0.97, "remove", ctx);
         status = remove_and_dart(&layout, result, ctx);
     }

@@ -275,6 +275,11 @@ typedef struct pz_segment_options {
      * longer stop a merge (result->budget_met: reached; docs/segment.md, "A piece budget and the
      * trade-off"). */
     int32_t max_pieces;
+    /* 1: stop as soon as the layout shows S out of reach with sound pieces: a panel over S already under a
+     * piece-shape goal (a split only makes it thinner), or panels over S once the insertion is done (removal
+     * and darts never mend them). The layout so far is returned, goals_met 0 and stopped_unsound 1, without
+     * removal or darts. panelize run's probe of an S its outlook doubts (docs/run.md, "Impossible goals"). */
+    int stop_when_unsound;
     /* Progress (may be NULL): stage name ("candidates", "insert", "remove", "darts", "budget"), called after
      * each insertion, removal, dart and budget merge with the current panel count and the worst strain among the
      * current panels that have been flattened (0 when none has). The context's progress callback
@@ -336,6 +341,7 @@ typedef struct pz_segment_result {
     pz_layout_curve *curves;     /* the layout split at junctions */
     int32_t dart_count;
     int goals_met;               /* every panel meets its goals */
+    int stopped_unsound;         /* options.stop_when_unsound stopped the layout (S out of reach with sound pieces) */
     char reasons[512];           /* when not: "panel 3: strain 0.071 > 0.05; ..." (truncated) */
     pz_symmetry symmetry;        /* the plane used (found = 0: none) */
     double symmetry_residual_mm; /* RMS distance between the layout's cut edges and their mirror images */

@@ -341,6 +341,16 @@ report_checks "run --max-strain 0: written layout" hemi0 \
     "not the layout of the reachable S written: $(grep -o '"looser_goals":[^}]*' hemi0/report.json | head -c 300)" \
     "d['segmentation']['looser_goals']['written_strain'] == d['segmentation']['looser_goals']['reachable_strain'] and d['summary']['panel_count'] == d['segmentation']['looser_goals']['reachable_panels']"
 check "run --max-strain 0: no note that the reachable layout is written" grep -q "is written instead, flattened for that S" "$WORK/err"
+# Impossible goals end quickly (issue 15): the outlook's doubt confirmed by one layout that stopped early, the
+# settings from the outlook's suggestion up laid out each on its own, not the ladder of five rungs from 0.05
+# down; the written layout flattened within its S (the final flattening used to run without a strain goal at
+# S = 0: 0.0695 where the S = 0.01 layout flattens within 0.0098). Fails if the path goes back to the ladder.
+report_checks "run --max-strain 0: the short path" hemi0 \
+    "the looser settings were climbed as a ladder: $(grep -o '"looser_goals":[^}]*' hemi0/report.json | head -c 300)" \
+    "d['segmentation']['looser_goals'].get('direct') is True and d['segmentation']['looser_goals']['settings'] <= 2 and d['segmentation']['looser_goals']['probe_panels'] >= 1" \
+    "the written layout exceeds the S it was written for: $(grep -o '"max_abs_strain":[^,]*' hemi0/report.json | head -c 100)" \
+    "d['summary']['max_abs_strain'] <= 1.05 * d['segmentation']['looser_goals']['written_strain']"
+check "run --max-strain 0: no note that the layout stopped" grep -q "^panelize: run: S = 0: the layout stopped at [0-9]* panels" "$WORK/err"
 # Said before the long work, in one line naming an S that would work (docs/run.md, "Can S be met?").
 check "run --max-strain 0: not one 'cannot be met' line before the layout: $(grep -n 'cannot be met\|goals unreachable' "$WORK/err" | head -c 300)" \
     python3 -c 'import re, sys
@@ -348,6 +358,11 @@ lines = open(sys.argv[1]).read().splitlines()
 said = [i for i, l in enumerate(lines) if re.match(r"panelize: run: S = 0 cannot be met with sound pieces: .*; S = 0\.\d\d would work$", l)]
 field = [i for i, l in enumerate(lines) if l.startswith("panelize: run: field:")]
 sys.exit(0 if len(said) == 1 and field and said[0] < field[0] else 1)' "$WORK/err"
+# --strict: exit 3, its one line naming the reachable S first.
+run run hemi.obj -o hemi0-strict --max-strain 0 --strict --quiet
+check "run --max-strain 0 --strict: exit $rc, expected 3" [ "$rc" -eq 3 ]
+check "run --max-strain 0 --strict: not one line naming the reachable S: $(head -c 300 "$WORK/err")" \
+    grep -q "S = 0 cannot be met here, S = $reachable can" "$WORK/err"
 report_checks "run --max-strain 0: outlook" hemi0 \
     "the outlook does not say S = 0 is out of reach" \
     "d['strain_outlook']['reachable'] is False and d['strain_outlook']['suggested_max_strain'] > 0" \

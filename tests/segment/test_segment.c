@@ -638,6 +638,33 @@ static void test_unreachable(void)
     CHECK(!result->goals_met, "S = 0 on a hemisphere met");
     CHECK(strstr(result->reasons, "strain") != NULL, "reasons: '%s'", result->reasons);
     CHECK(result->panel_count >= 1, "no panel");
+    CHECK(!result->stopped_unsound, "stopped early without stop_when_unsound");
+    /* stop_when_unsound (panelize run's probe, issue 15): the same layout stops once S shows out of reach with
+     * sound pieces, before removal and darts: marked, with fewer evaluations and no removal. */
+    pz_segment_options options;
+    pz_segment_options_default(&options);
+    options.max_strain = 0;
+    options.symmetry = PZ_SYMMETRY_OFF;
+    options.stop_when_unsound = 1;
+    pz_segment_result *probe = NULL;
+    REQUIRE_OK(pz_segment(g.mesh, g.topology, g.field, &options, &probe, &ctx), ctx);
+    CHECK(probe->stopped_unsound && !probe->goals_met, "S = 0 probe: stopped %d, goals met %d", probe->stopped_unsound,
+          probe->goals_met);
+    CHECK(probe->evaluation_count < result->evaluation_count && probe->removed_count == 0 && probe->dart_count == 0,
+          "S = 0 probe: %d evaluations (the full layout %d), %d removed, %d darts", (int)probe->evaluation_count,
+          (int)result->evaluation_count, (int)probe->removed_count, (int)probe->dart_count);
+    pz_segment_result_free(&probe);
+    /* A reachable S is never stopped: the layout is the one made without the option. */
+    options.max_strain = 0.05;
+    pz_segment_result *reachable = NULL, *plain = segment(&g, 0.05, 8, 0, PZ_SYMMETRY_OFF);
+    REQUIRE_OK(pz_segment(g.mesh, g.topology, g.field, &options, &reachable, &ctx), ctx);
+    CHECK(!reachable->stopped_unsound && reachable->goals_met == plain->goals_met &&
+              reachable->panel_count == plain->panel_count &&
+              !memcmp(reachable->edge_cut, plain->edge_cut, (size_t)reachable->edge_count),
+          "S = 0.05 with stop_when_unsound: stopped %d, %d panels against %d", reachable->stopped_unsound,
+          (int)reachable->panel_count, (int)plain->panel_count);
+    pz_segment_result_free(&reachable);
+    pz_segment_result_free(&plain);
     pz_segment_result_free(&result);
     garment_free(&g);
 }
