@@ -101,7 +101,7 @@ static double segment_distance(double px, double py, const double *a, const doub
  * (reach = gap/2 + half the cell diagonal, so every cell touching the
  * dilated polygon is set). 0 when out of memory.
  */
-static int draw_polygon(uint8_t *cells, int32_t width, int32_t height, const double *points, int32_t n,
+int marker_draw_polygon(uint8_t *cells, int32_t width, int32_t height, const double *points, int32_t n,
                         const double origin[2], double resolution, double reach)
 {
     /* Inside: even-odd scanline through each row's centre. */
@@ -181,7 +181,7 @@ static int unit_single(const marker_raster *raster, const pz_piece *piece, int32
     int32_t height = (int32_t)ceil((hi[1] + raster->reach - origin[1]) / raster->resolution) + 1;
     uint8_t *cells = calloc((size_t)width * (size_t)height, 1);
     int ok = cells &&
-             draw_polygon(cells, width, height, points, piece->cut_count, origin, raster->resolution, raster->reach) &&
+             marker_draw_polygon(cells, width, height, points, piece->cut_count, origin, raster->resolution, raster->reach) &&
              shape_from_cells(&out->shape, cells, width, height);
     free(cells);
     free(points);
