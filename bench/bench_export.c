@@ -22,7 +22,8 @@
  * (pieces, marker and every writer once), which a busy machine inflates
  * less than wall time; tiled_pages the pages of pattern-tiled.pdf after its
  * cover, page_area_bound the fewest A4 pages the drawn pieces' cut-line area
- * could fill (packed perfectly, no page shared); load the 1-minute load average (2 cores: figures
+ * could fill (packed perfectly, a page advancing 180 x 267 mm past the band
+ * it shares); load the 1-minute load average (2 cores: figures
  * taken above 1 are not comparable).
  * Usage: bench_export [FACES [REPEAT]] | bench_export PATTERN.obj... (defaults 50000, 3).
  *
@@ -143,7 +144,7 @@ static void bench_pattern(const char *name, const fixture *f, int repeat)
             printf(" %s_ms=%.1f", pz_export_files[i - 2].name, best[i]);
     }
     /* pattern-tiled.pdf's pages (the cover not counted) against the fewest A4 pages the drawn pieces' cut lines
-     * could cover packed perfectly: their area over a page's printable area. */
+     * could cover packed perfectly: their area over what a page adds (its printable area less a shared band). */
     tiled_layout layout;
     REQUIRE_OK(tiled_layout_build(pieces, "a4", &layout, &ctx), ctx);
     double drawn = 0;
@@ -151,7 +152,7 @@ static void bench_pattern(const char *name, const fixture *f, int repeat)
         drawn += pieces->pieces[p].mirrored ? 0 : pieces->pieces[p].area_mm2;
     printf(" total_ms=%.1f cpu_ms=%.0f marker_efficiency=%.4f tiled_pages=%d page_area_bound=%.0f load=%.2f\n", total,
            cpu, marker->efficiency, (int)layout.page_count,
-           ceil(drawn / (layout.printable[0] * layout.printable[1])), bench_load_average());
+           ceil(drawn / (layout.step[0] * layout.step[1])), bench_load_average());
     tiled_layout_free(&layout);
     pz_marker_free(&marker);
     pz_pieces_free(&pieces);
