@@ -104,8 +104,9 @@ typedef struct marker_score {
     double length, tops, across;
 } marker_score;
 
-/* The empty grid of a fabric width_mm wide with pieces gap_mm apart (no rows yet: marker_grid_grow). */
-marker_grid marker_grid_make(double width_mm, double gap_mm);
+/* The empty grid of a fabric width_mm wide with pieces gap_mm apart (no rows yet: marker_grid_grow): cells of
+ * width_mm / cells_across mm, at least finest_mm (and few enough for 16-bit stretches). */
+marker_grid marker_grid_make(double width_mm, double gap_mm, double cells_across, double finest_mm);
 /* At least `rows` rows allocated (new ones free). 0 when out of memory. */
 int marker_grid_grow(marker_grid *g, int32_t rows);
 void marker_grid_free(marker_grid *g);
