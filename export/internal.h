@@ -62,6 +62,7 @@ typedef struct marker_demand {
     marker_unit singles[2][2][2];  /* [transposed][copy][0: 0 degrees, 1: 180] */
     marker_unit pairs[2][4];       /* copies == 2: [transposed](copy 0, copy 1) turned (0,0) (0,180) (180,0) (180,180) */
     double keys[3];              /* area, height, width: the fixed orders */
+    int transposed;              /* the [1] units are made (marker_demand_transpose) */
 } marker_demand;
 
 /* Rasterizes the closed polygon `points` (n x 2) into `cells` (width x height, row-major, lower-left at `origin`,
@@ -71,9 +72,11 @@ typedef struct marker_demand {
 int marker_draw_polygon(uint8_t *cells, int32_t width, int32_t height, const double *points, int32_t n,
                         const double origin[2], double resolution, double reach);
 
-/* Every way piece `index` may be placed (its copies in both rotations, the pairs of a Cut-2 piece, all also
- * transposed). 0 when out of memory; marker_demand_clear frees what was built either way. */
+/* Every way piece `index` may be placed (its copies in both rotations, the pairs of a Cut-2 piece), not yet
+ * transposed. 0 when out of memory; marker_demand_clear frees what was built either way. */
 int marker_demand_build(const marker_raster *raster, const pz_pieces *pieces, int32_t index, marker_demand *out);
+/* The units transposed ([1]) for the column fill, once. 0 when out of memory. */
+int marker_demand_transpose(marker_demand *d);
 void marker_demand_clear(marker_demand *d);
 
 /* ------------------------------------------------------------------ marker: the fabric grid */

@@ -315,6 +315,11 @@ static int column_grid(search *s, double length_mm)
         s->column.raster.width_mm = length_mm;
         return 1;
     }
+    /* The units transposed, the first time a column fill runs (search_open made the demands, so they are ours). */
+    marker_demand *demands = (marker_demand *)s->demands;
+    for (int32_t i = 0; i < s->count; ++i)
+        if (!marker_demand_transpose(&demands[i]))
+            return -1;
     marker_grid g = {.raster = s->grid.raster, .margin = s->grid.margin, .transposed = 1,
               .fabric_width_mm = s->grid.raster.width_mm};
     g.raster.width_mm = length_mm;

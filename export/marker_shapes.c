@@ -8,7 +8,8 @@
  * concave outlines keep their hollows and other pieces can reach into them.
  * A Cut-2 piece is also one unit: copy 0 and its mirror image pushed against
  * its right side as close as their cells allow, in the four rotation
- * combinations. Every unit is also kept transposed for the column fill.
+ * combinations. The column fill transposes the units it needs
+ * (marker_demand_transpose) when it first runs: long markers never do.
  *
  * Separate from the search (export/marker.c) and the fabric grid
  * (export/marker_grid.c) because it is geometry done once per piece before
@@ -318,12 +319,25 @@ int marker_demand_build(const marker_raster *raster, const pz_pieces *pieces, in
     out->keys[2] = piece->bbox_max[0] - piece->bbox_min[0];
     for (int c = 0; c < out->copies; ++c)
         for (int r = 0; r < 2; ++r)
-            if (!unit_single(raster, piece, index, c, 180 * r, &out->singles[0][c][r]) ||
-                !unit_transpose(&out->singles[0][c][r], &out->singles[1][c][r]))
+            if (!unit_single(raster, piece, index, c, 180 * r, &out->singles[0][c][r]))
                 return 0;
     for (int k = 0; out->copies == 2 && k < 4; ++k)
-        if (!unit_pair(raster, &out->singles[0][0][k / 2], &out->singles[0][1][k % 2], &out->pairs[0][k]) ||
-            !unit_transpose(&out->pairs[0][k], &out->pairs[1][k]))
+        if (!unit_pair(raster, &out->singles[0][0][k / 2], &out->singles[0][1][k % 2], &out->pairs[0][k]))
             return 0;
+    return 1;
+}
+
+int marker_demand_transpose(marker_demand *d)
+{
+    if (d->transposed)
+        return 1;
+    for (int c = 0; c < d->copies; ++c)
+        for (int r = 0; r < 2; ++r)
+            if (!unit_transpose(&d->singles[0][c][r], &d->singles[1][c][r]))
+                return 0;
+    for (int k = 0; d->copies == 2 && k < 4; ++k)
+        if (!unit_transpose(&d->pairs[0][k], &d->pairs[1][k]))
+            return 0;
+    d->transposed = 1;
     return 1;
 }

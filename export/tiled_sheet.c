@@ -290,16 +290,40 @@ static pz_status place_piece(tiled_layout *layout, sheet *sh, const sheet_shape 
                     list[count++] = cand;
                 }
     }
-    qsort(list, count, sizeof *list, compare_candidates);
-    size_t chosen = count;
-    for (size_t i = 0; i < count && chosen == count; ++i) {
-        double at[2];
-        int32_t cell[2];
-        candidate_at(layout, &list[i], at);
-        shape_cell(&shapes[list[i].turn], at, cell);
-        if (sheet_free(sh, &shapes[list[i].turn], cell[0], cell[1]))
-            chosen = i;
+    /* By cost (a counting sort: costs are tile counts), each cost's candidates sorted only when the search reaches
+     * them: most pieces find room among the cheapest few. */
+    int32_t max_cost = 0;
+    for (size_t i = 0; i < count; ++i)
+        max_cost = list[i].cost > max_cost ? list[i].cost : max_cost;
+    size_t *start = calloc((size_t)max_cost + 2, sizeof *start);
+    candidate *sorted = malloc((count + 1) * sizeof *sorted);
+    if (!start || !sorted) {
+        free(start), free(sorted), free(list);
+        return pz_error(ctx, PZ_ERR_NOMEM, "pattern-tiled.pdf: out of memory");
     }
+    for (size_t i = 0; i < count; ++i)
+        ++start[list[i].cost + 1];
+    for (int32_t c = 0; c <= max_cost; ++c)
+        start[c + 1] += start[c];
+    for (size_t i = 0; i < count; ++i)
+        sorted[start[list[i].cost]++] = list[i];
+    free(list);
+    list = sorted;
+    size_t chosen = count;
+    for (size_t level = 0, i = 0; i < count && chosen == count; ++level) {
+        size_t end = start[level]; /* after the counting pass, start[c] is where cost c ends */
+        qsort(list + i, end - i, sizeof *list, compare_candidates);
+        for (; i < end && chosen == count; ++i) {
+            double at[2];
+            int32_t cell[2];
+            candidate_at(layout, &list[i], at);
+            shape_cell(&shapes[list[i].turn], at, cell);
+            if (sheet_free(sh, &shapes[list[i].turn], cell[0], cell[1]))
+                chosen = i;
+        }
+        i = end;
+    }
+    free(start);
     if (chosen == count) { /* not reached: below every piece the sheet is free */
         free(list);
         return pz_error(ctx, PZ_ERR_INTERNAL, "pattern-tiled.pdf: no room on the sheet");
