@@ -30,7 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { kShifts = 6 };                  /* lattice points per tile step along each axis */
+enum { kShifts = 4 };                  /* lattice points per tile step along each axis */
 static const double kCell = 5.0;       /* mm: the raster that keeps pieces apart */
 static const double kMaxTiles = 20000; /* as tiled_layout.c's page limit */
 /* The sheet's width in tiles over the square root of the tiles the pieces ink on their own: a wide sheet lets
