@@ -41,6 +41,9 @@
  *    (leftmost, then lowest), so the marker ends level at L where the
  *    bottom-left fill leaves a ragged top; L steps down below the best
  *    marker while a local search finds orders that fit the width.
+ *  - Coarse search, fine finish: the search runs on cells twice as large
+ *    (width / 500), its 8 best orders once more on the fine cells; the
+ *    shortest marker of both is kept.
  *  - Budgets are counted in grid_find's steps and in passes, not timed:
  *    deterministic, no threads, no clock, a fixed xorshift seed; a marker of
  *    many pieces on a long fabric gets fewer passes.
@@ -599,8 +602,9 @@ cJSON *pz_marker_report_json(const pz_marker *marker)
              cJSON_AddNumberToObject(json, "passes", marker->passes) &&
              cJSON_AddNumberToObject(json, "ms", round(marker->ms * 10) / 10) &&
              cJSON_AddStringToObject(json, "method",
-                                     "raster bottom-left fill over true shapes, order search with restarts, "
-                                     "column fill below the best length, rotations 0/180");
+                                     "raster bottom-left fill over true shapes, order search with restarts on "
+                                     "coarse cells, its best orders again on fine cells, column fill below the "
+                                     "best length, rotations 0/180");
     cJSON *unplaced = ok ? cJSON_AddArrayToObject(json, "unplaced") : NULL;
     ok = ok && unplaced;
     for (int32_t i = 0; ok && i < marker->unplaced_count; ++i)
