@@ -171,8 +171,7 @@ pz_status tiled_layout_build(const pz_pieces *pieces, const char *paper, tiled_l
 void tiled_layout_free(tiled_layout *layout);
 /* Where page `page` shows item `item`: the translation from the item's frame to the page's printable area (mm, y
  * up) into move; 1 when the page shows the item (whole, or some of it on this tile). */
-int tiled_item_on_page(const tiled_layout *layout, const pz_pieces *pieces, int32_t item, int32_t page,
-                       double move[2]);
+int tiled_item_on_page(const tiled_layout *layout, int32_t item, int32_t page, double move[2]);
 /* The item's frame point of a piece point (turned when the item is). */
 void tiled_turn(const tiled_item *item, const double point[2], double out[2]);
 

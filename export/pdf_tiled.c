@@ -52,7 +52,7 @@ static void draw_item(cairo_t *cr, const tiled_layout *layout, const pz_pieces *
 {
     const tiled_item *item = &layout->items[index];
     double move[2], zero[2] = {0, 0};
-    if (!tiled_item_on_page(layout, pieces, index, page, move))
+    if (!tiled_item_on_page(layout, index, page, move))
         return;
     cairo_save(cr);
     cairo_translate(cr, move[0], move[1]);
@@ -115,7 +115,7 @@ static void draw_frame(cairo_t *cr, const tiled_layout *layout, const pz_pieces 
     int named = 0;
     for (int32_t i = 0; i < layout->item_count && used < (int)sizeof label - 1; ++i) {
         double move[2];
-        if (layout->items[i].piece >= 0 && tiled_item_on_page(layout, pieces, i, page, move))
+        if (layout->items[i].piece >= 0 && tiled_item_on_page(layout, i, page, move))
             used += snprintf(label + used, sizeof label - (size_t)used, "%s%s", named++ ? ", " : ": ",
                              pieces->pieces[layout->items[i].piece].name);
     }
@@ -203,7 +203,7 @@ static void draw_cover(cairo_t *cr, const tiled_layout *layout, const pz_pieces 
             int used = snprintf(text, sizeof text, "%s (%s): sheet, pages", piece->name, pz_piece_cut_text(piece));
             double move[2];
             for (int32_t page = 0; page < layout->page_count && used < (int)sizeof text - 8; ++page)
-                if (layout->pages[page].row >= 0 && tiled_item_on_page(layout, pieces, i, page, move))
+                if (layout->pages[page].row >= 0 && tiled_item_on_page(layout, i, page, move))
                     used += snprintf(text + used, sizeof text - (size_t)used, " %d", (int)page + 2);
         }
         pdf_text(cr, 0, y, size, text);

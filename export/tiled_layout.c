@@ -301,10 +301,8 @@ void tiled_own_part(const tiled_layout *layout, int32_t row, int32_t column, dou
         lo[0] += layout->overlap;
 }
 
-int tiled_item_on_page(const tiled_layout *layout, const pz_pieces *pieces, int32_t index, int32_t page,
-                       double move[2])
+int tiled_item_on_page(const tiled_layout *layout, int32_t index, int32_t page, double move[2])
 {
-    (void)pieces;
     const tiled_item *item = &layout->items[index];
     const tiled_page *p = &layout->pages[page];
     if (!item->on_sheet) {
@@ -362,7 +360,7 @@ static int tile_taken(packer *pk, const tiled_layout *layout, const pz_pieces *p
     for (int32_t i = 0; i < layout->item_count; ++i) {
         const tiled_item *item = &layout->items[i];
         double move[2];
-        if (!item->on_sheet || !tiled_item_on_page(layout, pieces, i, page, move))
+        if (!item->on_sheet || !tiled_item_on_page(layout, i, page, move))
             continue;
         int32_t n = pieces->pieces[item->piece].cut_count;
         double *outline = tiled_sheet_outline(pieces, item, item->at);

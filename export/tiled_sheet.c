@@ -354,8 +354,17 @@ pz_status tiled_sheet_nest(tiled_layout *layout, const pz_pieces *pieces, const 
     int32_t *order = malloc(((size_t)count + 1) * sizeof *order);
     sheet sh = {0};
     pz_status status = shapes && order ? PZ_OK : pz_error(ctx, PZ_ERR_NOMEM, "pattern-tiled.pdf: out of memory");
-    double own_tiles = 0;
+    double own_tiles = 0, box_tiles = 0;
     int32_t widest = 1;
+    /* Before any raster is made: a garment in the wrong units (90 m tall) is refused, not rasterized. */
+    for (int32_t i = 0; status == PZ_OK && i < count; ++i) {
+        const tiled_item *item = &layout->items[which[i]];
+        box_tiles += ceil((item->hi[0] - item->lo[0]) / layout->step[0] + 1) *
+                     ceil((item->hi[1] - item->lo[1]) / layout->step[1] + 1);
+    }
+    if (status == PZ_OK && box_tiles > kMaxTiles)
+        status = pz_error(ctx, PZ_ERR_DATA, "pattern-tiled.pdf: the pieces need more than %d pages; is the garment "
+                                            "in the right units (--units)?", (int)kMaxTiles);
     for (int32_t i = 0; status == PZ_OK && i < count; ++i) {
         for (int t = 0; t < 2 && status == PZ_OK; ++t) {
             sheet_shape *s = &shapes[2 * i + t];

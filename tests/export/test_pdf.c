@@ -22,7 +22,8 @@
  *  - piece names and "Cut 2 mirrored" are in the text; a Latin-1 name is
  *    shown with '?' for its non-UTF-8 bytes (cairo would refuse it);
  *  - with SOURCE_DATE_EPOCH two writes a second apart are byte-identical;
- *  - an unknown paper is PZ_ERR_USAGE; a stream that cannot be written gives
+ *  - an unknown paper is PZ_ERR_USAGE, a 100 x 100 m piece PZ_ERR_DATA
+ *    (before any raster is made); a stream that cannot be written gives
  *    PZ_ERR_CREATE.
  * Pieces: 12 hand-made rectangles and L-shapes, and pz_pieces_build's for
  * the 4 panels of a flattened bodice (notches, dart lines).
@@ -326,6 +327,19 @@ static void test_boxes(void)
     CHECK(pz_export_write_pdf_tiled(sink, &a3_inputs, "tiled.pdf", &ctx) == PZ_ERR_USAGE && strstr(ctx.error, "a3"),
           "%s", ctx.error);
     fclose(sink);
+
+    /* A piece of 100 x 100 m (a garment read in the wrong units) is refused before any raster is made. */
+    pz_pieces *huge = fixture_pieces_alloc(1);
+    fixture_piece_box(&huge->pieces[0], 0, "huge", 100000, 100000, 0);
+    pz_export_options huge_options;
+    pz_export_options_default(&huge_options);
+    pz_export_inputs huge_inputs = {.pieces = huge, .options = &huge_options};
+    sink = tmpfile();
+    REQUIRE(sink, "tmpfile");
+    CHECK(pz_export_write_pdf_tiled(sink, &huge_inputs, "tiled.pdf", &ctx) == PZ_ERR_DATA && strstr(ctx.error, "units"),
+          "a 100 m piece: %s", ctx.error);
+    fclose(sink);
+    fixture_pieces_free(huge);
 
     /* With SOURCE_DATE_EPOCH the same pattern gives the same bytes (cairo would stamp the time). */
     pz_export_options same;

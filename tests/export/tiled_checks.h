@@ -32,7 +32,7 @@ static inline double *tiled_check_outline(const tiled_layout *layout, const pz_p
     const tiled_item *item = &layout->items[i];
     const pz_piece *piece = &pieces->pieces[item->piece];
     double move[2];
-    tiled_item_on_page(layout, pieces, i, page, move);
+    tiled_item_on_page(layout, i, page, move);
     double *points = malloc(((size_t)piece->cut_count + 1) * 2 * sizeof(double));
     REQUIRE(points, "out of memory");
     for (int32_t k = 0; k < piece->cut_count; ++k) {
@@ -94,7 +94,7 @@ static inline int32_t check_tiled_layout(const pz_pieces *pieces, const char *pa
         /* No cut line of the sheet meets the box on this page. */
         for (int32_t j = 0; j < layout.item_count; ++j) {
             double move[2];
-            if (!layout.items[j].on_sheet || !tiled_item_on_page(&layout, pieces, j, a->page, move))
+            if (!layout.items[j].on_sheet || !tiled_item_on_page(&layout, j, a->page, move))
                 continue;
             double *outline = tiled_check_outline(&layout, pieces, j, a->page);
             double lo[2] = {a->at[0], a->at[1]}, hi[2] = {a->at[0] + w, a->at[1] + h};
