@@ -34,7 +34,8 @@ enum { kShifts = 4 };                  /* lattice points per tile step along eac
 static const double kCell = 5.0;       /* mm: the raster that keeps pieces apart */
 static const double kMaxTiles = 20000; /* as tiled_layout.c's page limit */
 /* The sheet's width in tiles over the square root of the tiles the pieces ink on their own: a wide sheet lets
- * more pieces meet along their long sides (the wetsuit: 390 pages at 0.1, 386 at 0.7, 379 at 1.5, 375 at 3). */
+ * more pieces meet along their long sides (the wetsuit, 6 x 6 shifts: 390 pages at 0.1, 386 at 0.7, 379 at 1.5,
+ * 375 at 3). */
 static const double kSheetWidth = 2.0;
 
 /* One turn of one piece: its raster as runs per row (rows from the top), and per lattice shift the tiles it
