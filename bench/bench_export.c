@@ -15,11 +15,15 @@
  *   FILE    the writer of FILE into a temporary file
  * One line per pattern:
  *   bench_export case=... faces=... pieces=... cut_points=... notches=...
- *                pieces_ms=... marker_ms=... <file>_ms=... total_ms=... cpu_ms=... load=...
+ *                pieces_ms=... marker_ms=... <file>_ms=... total_ms=... cpu_ms=... marker_efficiency=...
+ *                tiled_pages=... page_area_bound=... load=...
  * total_ms is the sum of the best times (the issue's goal: under 1000 for
  * the 50K-face bodice); cpu_ms the process CPU time of one such round
  * (pieces, marker and every writer once), which a busy machine inflates
- * less than wall time; load the 1-minute load average (2 cores: figures
+ * less than wall time; tiled_pages the pages of pattern-tiled.pdf after its
+ * cover, page_area_bound the fewest A4 pages the drawn pieces' cut-line area
+ * could fill (packed perfectly, a page advancing 180 x 267 mm past the band
+ * it shares); load the 1-minute load average (2 cores: figures
  * taken above 1 are not comparable).
  * Usage: bench_export [FACES [REPEAT]] | bench_export PATTERN.obj... (defaults 50000, 3).
  *
@@ -27,6 +31,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "../tests/export/export_fixtures.h"
+#include "export/internal.h"
 #include "generate/generate.h"
 
 #include <float.h>
@@ -138,8 +143,17 @@ static void bench_pattern(const char *name, const fixture *f, int repeat)
         if (i >= 2)
             printf(" %s_ms=%.1f", pz_export_files[i - 2].name, best[i]);
     }
-    printf(" total_ms=%.1f cpu_ms=%.0f marker_efficiency=%.4f load=%.2f\n", total, cpu, marker->efficiency,
-           bench_load_average());
+    /* pattern-tiled.pdf's pages (the cover not counted) against the fewest A4 pages the drawn pieces' cut lines
+     * could cover packed perfectly: their area over what a page adds (its printable area less a shared band). */
+    tiled_layout layout;
+    REQUIRE_OK(tiled_layout_build(pieces, "a4", &layout, &ctx), ctx);
+    double drawn = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        drawn += pieces->pieces[p].mirrored ? 0 : pieces->pieces[p].area_mm2;
+    printf(" total_ms=%.1f cpu_ms=%.0f marker_efficiency=%.4f tiled_pages=%d page_area_bound=%.0f load=%.2f\n", total,
+           cpu, marker->efficiency, (int)layout.page_count,
+           ceil(drawn / (layout.step[0] * layout.step[1])), bench_load_average());
+    tiled_layout_free(&layout);
     pz_marker_free(&marker);
     pz_pieces_free(&pieces);
     pz_metrics_free(&metrics);

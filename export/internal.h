@@ -1,6 +1,7 @@
 /*
  * export/internal.h -- what the files of one export part share, not part of
- * the public interface (export/export.h is). Today: the marker's pieces
+ * the public interface (export/export.h is): the layout of pattern-tiled.pdf
+ * (export/pdf_tiled.c), pieces cut on the fold, and the marker's pieces
  * (export/marker.c: the search over orders, the build, marker.svg;
  * export/marker_shapes.c: pieces rasterized into shapes and placement units;
  * export/marker_grid.c: the fabric grid and one greedy pass). docs/marker.md
@@ -61,11 +62,21 @@ typedef struct marker_demand {
     marker_unit singles[2][2][2];  /* [transposed][copy][0: 0 degrees, 1: 180] */
     marker_unit pairs[2][4];       /* copies == 2: [transposed](copy 0, copy 1) turned (0,0) (0,180) (180,0) (180,180) */
     double keys[3];              /* area, height, width: the fixed orders */
+    int transposed;              /* the [1] units are made (marker_demand_transpose) */
 } marker_demand;
 
-/* Every way piece `index` may be placed (its copies in both rotations, the pairs of a Cut-2 piece, all also
- * transposed). 0 when out of memory; marker_demand_clear frees what was built either way. */
+/* Rasterizes the closed polygon `points` (n x 2) into `cells` (width x height, row-major, lower-left at `origin`,
+ * square cells of `resolution` mm): every cell whose centre is inside, or within `reach` of an edge, is set (so
+ * with reach = margin + half a cell diagonal every cell the polygon dilated by margin touches). 0 when out of
+ * memory. */
+int marker_draw_polygon(uint8_t *cells, int32_t width, int32_t height, const double *points, int32_t n,
+                        const double origin[2], double resolution, double reach);
+
+/* Every way piece `index` may be placed (its copies in both rotations, the pairs of a Cut-2 piece), not yet
+ * transposed. 0 when out of memory; marker_demand_clear frees what was built either way. */
 int marker_demand_build(const marker_raster *raster, const pz_pieces *pieces, int32_t index, marker_demand *out);
+/* The units transposed ([1]) for the column fill, once. 0 when out of memory. */
+int marker_demand_transpose(marker_demand *d);
 void marker_demand_clear(marker_demand *d);
 
 /* ------------------------------------------------------------------ marker: the fabric grid */
@@ -96,8 +107,9 @@ typedef struct marker_score {
     double length, tops, across;
 } marker_score;
 
-/* The empty grid of a fabric width_mm wide with pieces gap_mm apart (no rows yet: marker_grid_grow). */
-marker_grid marker_grid_make(double width_mm, double gap_mm);
+/* The empty grid of a fabric width_mm wide with pieces gap_mm apart (no rows yet: marker_grid_grow): cells of
+ * width_mm / cells_across mm, at least finest_mm (and few enough for 16-bit stretches). */
+marker_grid marker_grid_make(double width_mm, double gap_mm, double cells_across, double finest_mm);
 /* At least `rows` rows allocated (new ones free). 0 when out of memory. */
 int marker_grid_grow(marker_grid *g, int32_t rows);
 void marker_grid_free(marker_grid *g);
@@ -112,6 +124,71 @@ int marker_score_better(marker_score a, marker_score b);
  */
 pz_status marker_nest_pass(marker_grid *g, const pz_pieces *pieces, const marker_demand *demands, const int32_t *order,
                            int32_t count, pz_marker_placement *out, int32_t *out_count, marker_score *score,
+                           pz_ctx *ctx);
+
+/* ------------------------------------------------------------------ pattern-tiled.pdf's layout */
+
+/* One thing on the pages: a piece (piece >= 0) or the scale box (-1), in its own frame: piece coordinates,
+ * turned 90 degrees counter-clockwise ((x, y) -> (-y, x)) when `turned`. */
+typedef struct tiled_item {
+    int32_t piece;
+    int turned;
+    double lo[2], hi[2]; /* its box in its frame (the cut line's, turned) */
+    int on_sheet;        /* 0: whole on page `page`; 1: larger than a page, nested on the sheet of tiles */
+    int32_t page;
+    double at[2];        /* whole: its box's lower-left on the page's printable area (mm, y up); on the sheet:
+                          * its box's top-left on the sheet (mm, x right, y down from the sheet's top-left) */
+} tiled_item;
+
+/* A page: the sheet's tile (row, column), or (-1, -1) for a page of whole items only. Whole items also go into
+ * the free parts of tile pages. */
+typedef struct tiled_page {
+    int32_t row, column;
+} tiled_page;
+
+typedef struct tiled_layout {
+    double paper[2];       /* mm, portrait */
+    double printable[2];   /* paper minus the margins */
+    double step[2];        /* from one tile to the next: printable minus the shared band */
+    double overlap;        /* the band neighbouring tiles share */
+    double gap;            /* between whole items, and between them and a tile's ink */
+    int32_t item_count, page_count;
+    tiled_item *items;
+    tiled_page *pages;
+    int32_t sheet_rows, sheet_columns;
+    int32_t *tile_page;    /* sheet_rows x sheet_columns: the page printing each tile, -1 for a blank tile */
+} tiled_layout;
+
+/*
+ * The pages of pattern-tiled.pdf (docs/export.md, "pattern-tiled.pdf"): every drawn piece that fits a page
+ * (turned 90 degrees if need be) whole on one page, several packed on a page; the pieces larger than a page
+ * nested together on one sheet cut into tiles (tiled_sheet_nest), its blank tiles dropped; whole pieces packed
+ * into the tiles' free parts too. The scale box last, where room is left, its page first. PZ_ERR_USAGE for a paper other than
+ * a4/letter (NULL = a4), PZ_ERR_DATA for more than 20,000 pages, PZ_ERR_NOMEM. The caller frees with
+ * tiled_layout_free.
+ */
+pz_status tiled_layout_build(const pz_pieces *pieces, const char *paper, tiled_layout *out, pz_ctx *ctx);
+void tiled_layout_free(tiled_layout *layout);
+/* Where page `page` shows item `item`: the translation from the item's frame to the page's printable area (mm, y
+ * up) into move; 1 when the page shows the item (whole, or some of it on this tile). */
+int tiled_item_on_page(const tiled_layout *layout, int32_t item, int32_t page, double move[2]);
+/* The item's frame point of a piece point (turned when the item is). */
+void tiled_turn(const tiled_item *item, const double point[2], double out[2]);
+
+/* Shared by export/tiled_layout.c and export/tiled_sheet.c. */
+/* The item of piece p (-1: the scale box) in turn `turned`, its box set. */
+void tiled_item_make(const pz_pieces *pieces, int32_t p, int turned, tiled_item *item);
+/* The piece's cut line in sheet coordinates for an item whose box's top-left is at `at` (malloc'd, cut_count
+ * points; NULL when out of memory). */
+double *tiled_sheet_outline(const pz_pieces *pieces, const tiled_item *item, const double at[2]);
+/* The own part of tile (row, column) in sheet coordinates: its region without the bands it shares with the tiles
+ * above and to the left (which print what lies there). */
+void tiled_own_part(const tiled_layout *layout, int32_t row, int32_t column, double lo[2], double hi[2]);
+/* 1 when the closed polygon has ink in the box: an edge meets it, or it covers the box. */
+int tiled_polygon_meets_box(const double *points, int32_t n, const double lo[2], const double hi[2]);
+/* Nests the items `which` (count of them, all larger than a page) on the sheet: sets their turn, box, on_sheet
+ * and at, and layout->sheet_rows, sheet_columns. PZ_ERR_NOMEM, PZ_ERR_DATA when the sheet passes 20,000 tiles. */
+pz_status tiled_sheet_nest(tiled_layout *layout, const pz_pieces *pieces, const int32_t *which, int32_t count,
                            pz_ctx *ctx);
 
 #endif

@@ -24,9 +24,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Grid cells across the fabric: finer wastes less fabric to the raster, coarser is faster. */
-#define CELLS_ACROSS 1000.0
-
 /* ------------------------------------------------------------------ the fabric grid */
 
 /* Rows per block of the block maxima that let grid_find skip full stretches of fabric (divides 256). */
@@ -335,11 +332,11 @@ pz_status marker_nest_pass(marker_grid *g, const pz_pieces *pieces, const marker
     return PZ_OK;
 }
 
-marker_grid marker_grid_make(double width_mm, double gap_mm)
+marker_grid marker_grid_make(double width_mm, double gap_mm, double cells_across, double finest_mm)
 {
     marker_grid g = {.raster = {0, 0, width_mm}};
     g.raster.resolution =
-        fmax(fmax(1.0, width_mm / CELLS_ACROSS), (width_mm + gap_mm + 8.0) / (MARKER_MAX_COLUMNS - 32));
+        fmax(fmax(finest_mm, width_mm / cells_across), (width_mm + gap_mm + 8.0) / (MARKER_MAX_COLUMNS - 32));
     g.raster.reach = gap_mm / 2.0 + g.raster.resolution * 0.5 * sqrt(2.0) + 1e-9;
     g.margin = (int32_t)ceil(g.raster.reach / g.raster.resolution) + 1;
     g.columns = (int32_t)ceil(width_mm / g.raster.resolution) + 2 * g.margin + 3;

@@ -8,7 +8,8 @@
  * concave outlines keep their hollows and other pieces can reach into them.
  * A Cut-2 piece is also one unit: copy 0 and its mirror image pushed against
  * its right side as close as their cells allow, in the four rotation
- * combinations. Every unit is also kept transposed for the column fill.
+ * combinations. The column fill transposes the units it needs
+ * (marker_demand_transpose) when it first runs: long markers never do.
  *
  * Separate from the search (export/marker.c) and the fabric grid
  * (export/marker_grid.c) because it is geometry done once per piece before
@@ -101,7 +102,7 @@ static double segment_distance(double px, double py, const double *a, const doub
  * (reach = gap/2 + half the cell diagonal, so every cell touching the
  * dilated polygon is set). 0 when out of memory.
  */
-static int draw_polygon(uint8_t *cells, int32_t width, int32_t height, const double *points, int32_t n,
+int marker_draw_polygon(uint8_t *cells, int32_t width, int32_t height, const double *points, int32_t n,
                         const double origin[2], double resolution, double reach)
 {
     /* Inside: even-odd scanline through each row's centre. */
@@ -181,7 +182,7 @@ static int unit_single(const marker_raster *raster, const pz_piece *piece, int32
     int32_t height = (int32_t)ceil((hi[1] + raster->reach - origin[1]) / raster->resolution) + 1;
     uint8_t *cells = calloc((size_t)width * (size_t)height, 1);
     int ok = cells &&
-             draw_polygon(cells, width, height, points, piece->cut_count, origin, raster->resolution, raster->reach) &&
+             marker_draw_polygon(cells, width, height, points, piece->cut_count, origin, raster->resolution, raster->reach) &&
              shape_from_cells(&out->shape, cells, width, height);
     free(cells);
     free(points);
@@ -318,12 +319,25 @@ int marker_demand_build(const marker_raster *raster, const pz_pieces *pieces, in
     out->keys[2] = piece->bbox_max[0] - piece->bbox_min[0];
     for (int c = 0; c < out->copies; ++c)
         for (int r = 0; r < 2; ++r)
-            if (!unit_single(raster, piece, index, c, 180 * r, &out->singles[0][c][r]) ||
-                !unit_transpose(&out->singles[0][c][r], &out->singles[1][c][r]))
+            if (!unit_single(raster, piece, index, c, 180 * r, &out->singles[0][c][r]))
                 return 0;
     for (int k = 0; out->copies == 2 && k < 4; ++k)
-        if (!unit_pair(raster, &out->singles[0][0][k / 2], &out->singles[0][1][k % 2], &out->pairs[0][k]) ||
-            !unit_transpose(&out->pairs[0][k], &out->pairs[1][k]))
+        if (!unit_pair(raster, &out->singles[0][0][k / 2], &out->singles[0][1][k % 2], &out->pairs[0][k]))
             return 0;
+    return 1;
+}
+
+int marker_demand_transpose(marker_demand *d)
+{
+    if (d->transposed)
+        return 1;
+    for (int c = 0; c < d->copies; ++c)
+        for (int r = 0; r < 2; ++r)
+            if (!unit_transpose(&d->singles[0][c][r], &d->singles[1][c][r]))
+                return 0;
+    for (int k = 0; d->copies == 2 && k < 4; ++k)
+        if (!unit_transpose(&d->pairs[0][k], &d->pairs[1][k]))
+            return 0;
+    d->transposed = 1;
     return 1;
 }

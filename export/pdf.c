@@ -1,12 +1,12 @@
 /*
- * export/pdf.c -- pattern.pdf (one sheet at 1:1) and pattern-tiled.pdf (the
- * same sheet cut into A4 or Letter pages for home printing), through cairo.
+ * export/pdf.c -- pattern.pdf (one sheet at 1:1) through cairo, and the
+ * drawing of pieces that pattern-tiled.pdf (export/pdf_tiled.c) shares.
  *
  * The sheet: every drawn piece (pz_piece.mirrored == 0) where
  * pz_pieces_sheet_layout puts it (the layout of pattern.svg: rows, tallest
  * first, 20 mm apart), under a band with the title and the 10 cm scale box (a
  * 100 x 100 mm square at the top left, drawn as one rectangle so its size can
- * be read back from the PDF; the first tile always shows it whole). Pieces
+ * be read back from the PDF). Pieces
  * keep their pattern orientation (the grain runs up the page). 1 mm = 72 /
  * 25.4 pt.
  *
@@ -21,14 +21,8 @@
  * between pieces where a gap allows (sheet_pages below), each labelled
  * "part K of N".
  *
- * Tiles: printable area = paper minus 10 mm margins; neighbouring tiles share
- * 10 mm (the overlap band, dashed on the page). A tile whose printable area
- * meets no ink (no cut line, no scale box, no title) is dropped, and so is
- * one whose only ink lies in the bands it shares with the tiles above and to
- * the left (those print it). The cover page shows the sheet scaled to fit
- * with the tile grid, each tile's "row, column" and dropped tiles greyed. Every tile page has trim marks at
- * the printable area's corners and "row R col C, page N of M" (N, M count
- * PDF pages, cover included) in its bottom margin.
+ * pattern-tiled.pdf (the pieces on A4 or Letter pages) is export/pdf_tiled.c,
+ * which draws with this file's functions (export/pdf_internal.h).
  *
  * Text that is not UTF-8 is shown with '?' (cairo refuses it). The creation
  * date is SOURCE_DATE_EPOCH's when set (byte-identical output), else now.
@@ -38,7 +32,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L /* gmtime_r */
-#include "export/export.h"
+#include "export/pdf_internal.h"
 #include "export/notches.h"
 #include "export/stream_status.h"
 #include "export/xml_text.h"
@@ -52,7 +46,6 @@
 #include <string.h>
 #include <time.h>
 
-#define PT_PER_MM (72.0 / 25.4)
 
 /*
  * cairo's text goes through fontconfig, which keeps what it resolved for the
@@ -87,8 +80,7 @@ const char *__lsan_default_options(void)
 static const double kPieceGap = 20.0;      /* between pieces on the sheet */
 static const double kScaleBox = 100.0;     /* the scale square's side */
 static const double kTitleBand = 16.0;     /* title line above the content */
-static const double kPaperMargin = 10.0;   /* unprintable border of a tile page */
-static const double kOverlap = 10.0;       /* shared by neighbouring tiles */
+static const double kOverlap = 10.0;       /* printed on both pages where a cut goes through ink */
 
 /* ------------------------------------------------------------------ the sheet layout */
 
@@ -120,7 +112,7 @@ static pz_status sheet_build(const pz_pieces *pieces, sheet *out, pz_ctx *ctx)
     double size[2];
     pz_pieces_sheet_layout(pieces, kPieceGap, kTitleBand + kScaleBox + kPieceGap, offsets, size);
     out->width = size[0], out->height = size[1];
-    /* The scale box first, top left under the title: tile (1, 1) of the tiled PDF shows all of it. */
+    /* The scale box first, top left under the title. */
     sheet_item *box = &out->items[out->item_count++];
     box->piece = -1;
     box->lo[0] = kPieceGap, box->lo[1] = size[1] - kTitleBand - kScaleBox;
@@ -152,24 +144,24 @@ static void sheet_space(cairo_t *cr, double sheet_height)
 }
 
 /* cairo refuses text that is not UTF-8, and fails the whole surface with it. */
-static void show_text(cairo_t *cr, const char *text)
+void pdf_show_text(cairo_t *cr, const char *text)
 {
     char clean[256];
     cairo_show_text(cr, pz_utf8_clean(text, clean, sizeof clean));
 }
 
 /* Text at (x, y) (sheet mm, y up), `size` mm high, upright. */
-static void draw_text(cairo_t *cr, double x, double y, double size, const char *text)
+void pdf_text(cairo_t *cr, double x, double y, double size, const char *text)
 {
     cairo_save(cr);
     cairo_move_to(cr, x, y);
     cairo_scale(cr, 1, -1);
     cairo_set_font_size(cr, size);
-    show_text(cr, text);
+    pdf_show_text(cr, text);
     cairo_restore(cr);
 }
 
-static void path_polyline(cairo_t *cr, const double *points, int32_t n, const double offset[2], int closed)
+void pdf_polyline(cairo_t *cr, const double *points, int32_t n, const double offset[2], int closed)
 {
     for (int32_t i = 0; i < n; ++i) {
         double x = points[2 * i] + offset[0], y = points[2 * i + 1] + offset[1];
@@ -218,27 +210,27 @@ static void draw_piece_texts(cairo_t *cr, const pz_pieces *pieces, const pz_piec
     double size = 5.0 * scale, x = (lo[0] + hi[0]) / 2 + offset[0] + 3 * scale;
     double y = (lo[1] + hi[1]) / 2 + offset[1] + 2 * size;
     for (int l = 0; l < 5; ++l, y -= 1.4 * size)
-        draw_text(cr, x, y, l == 0 ? 1.3 * size : size, lines[l]);
+        pdf_text(cr, x, y, l == 0 ? 1.3 * size : size, lines[l]);
 }
 
 /* Everything of one piece at `offset` (sheet mm). */
-static void draw_piece(cairo_t *cr, const pz_pieces *pieces, const pz_piece *piece, const double offset[2])
+void pdf_draw_piece(cairo_t *cr, const pz_pieces *pieces, const pz_piece *piece, const double offset[2])
 {
     cairo_set_source_rgb(cr, 0, 0, 0);
     cairo_set_line_width(cr, 0.5);
     cairo_set_dash(cr, NULL, 0, 0);
-    path_polyline(cr, piece->cut, piece->cut_count, offset, 1);
+    pdf_polyline(cr, piece->cut, piece->cut_count, offset, 1);
     cairo_stroke(cr);
 
     const double dash[2] = {3.0, 2.0};
     cairo_set_line_width(cr, 0.3);
     cairo_set_dash(cr, dash, 2, 0);
-    path_polyline(cr, piece->sew, piece->sew_count, offset, 1);
+    pdf_polyline(cr, piece->sew, piece->sew_count, offset, 1);
     cairo_stroke(cr);
     cairo_set_dash(cr, NULL, 0, 0);
 
     for (int32_t l = 0; l < piece->line_count; ++l) {
-        path_polyline(cr, piece->lines[l].points, piece->lines[l].point_count, offset, 0);
+        pdf_polyline(cr, piece->lines[l].points, piece->lines[l].point_count, offset, 0);
         cairo_stroke(cr);
     }
     /* Notches at one place (two seams' ends at a corner) once, their labels joined; each on its own when out of
@@ -256,7 +248,7 @@ static void draw_piece(cairo_t *cr, const pz_pieces *pieces, const pz_piece *pie
         cairo_line_to(cr, x - notch->depth_mm * notch->direction[0], y - notch->depth_mm * notch->direction[1]);
         cairo_stroke(cr);
         if (label[0])
-            draw_text(cr, notch->position[0] + offset[0] - 6 * notch->direction[0] - 2,
+            pdf_text(cr, notch->position[0] + offset[0] - 6 * notch->direction[0] - 2,
                       notch->position[1] + offset[1] - 6 * notch->direction[1] - 1, 3.0, label);
     }
     free(labels);
@@ -275,7 +267,7 @@ static void draw_scale_box(cairo_t *cr, const sheet_item *item)
     cairo_set_dash(cr, NULL, 0, 0);
     cairo_rectangle(cr, item->lo[0], item->lo[1], kScaleBox, kScaleBox);
     cairo_stroke(cr);
-    draw_text(cr, item->lo[0] + 35, item->lo[1] + 47, 10.0, "10 cm");
+    pdf_text(cr, item->lo[0] + 35, item->lo[1] + 47, 10.0, "10 cm");
 }
 
 static void draw_title(cairo_t *cr, const pz_pieces *pieces, const sheet *sheet)
@@ -284,7 +276,7 @@ static void draw_title(cairo_t *cr, const pz_pieces *pieces, const sheet *sheet)
     snprintf(title, sizeof title, "%s - size %s - %d pieces - print at 100%% (scale box = 10 cm)",
              pieces->garment_name, pieces->size_name, (int)(sheet->item_count - 1));
     cairo_set_source_rgb(cr, 0, 0, 0);
-    draw_text(cr, kPieceGap, sheet->height - kTitleBand + 4, 6.0, title);
+    pdf_text(cr, kPieceGap, sheet->height - kTitleBand + 4, 6.0, title);
 }
 
 static int boxes_meet(const double alo[2], const double ahi[2], const double blo[2], const double bhi[2])
@@ -312,19 +304,13 @@ static void draw_sheet(cairo_t *cr, const pz_export_inputs *inputs, const sheet 
         if (item->piece < 0)
             draw_scale_box(cr, item);
         else
-            draw_piece(cr, inputs->pieces, &inputs->pieces->pieces[item->piece], item->offset);
+            pdf_draw_piece(cr, inputs->pieces, &inputs->pieces->pieces[item->piece], item->offset);
     }
 }
 
 /* ------------------------------------------------------------------ streams */
 
-/* The PDF's stream: cairo calls write_stream; the first failure's errno is kept for the message. */
-typedef struct pdf_stream {
-    FILE *file;
-    int error;
-} pdf_stream;
-
-static cairo_status_t write_stream(void *closure, const unsigned char *data, unsigned int length)
+cairo_status_t pdf_write_stream(void *closure, const unsigned char *data, unsigned int length)
 {
     pdf_stream *stream = closure;
     if (fwrite(data, 1, length, stream->file) == length)
@@ -335,7 +321,7 @@ static cairo_status_t write_stream(void *closure, const unsigned char *data, uns
 }
 
 /* Finishes the surface and turns cairo's and the stream's state into a status. */
-static pz_status finish(cairo_surface_t *surface, cairo_t *cr, pdf_stream *stream, const char *name, pz_ctx *ctx)
+pz_status pdf_finish(cairo_surface_t *surface, cairo_t *cr, pdf_stream *stream, const char *name, pz_ctx *ctx)
 {
     cairo_status_t drawing = cr ? cairo_status(cr) : CAIRO_STATUS_SUCCESS;
     if (cr)
@@ -353,7 +339,7 @@ static pz_status finish(cairo_surface_t *surface, cairo_t *cr, pdf_stream *strea
     return PZ_OK;
 }
 
-static void set_metadata(cairo_surface_t *surface, const pz_pieces *pieces, const char *what)
+void pdf_set_metadata(cairo_surface_t *surface, const pz_pieces *pieces, const char *what)
 {
     char title[160], clean[160];
     snprintf(title, sizeof title, "%s (%s): %s", pieces->garment_name, pieces->size_name, what);
@@ -389,7 +375,6 @@ static void set_metadata(cairo_surface_t *surface, const pz_pieces *pieces, cons
  * pages).
  */
 static const double kPageLimit = 5000.0;   /* mm; 14173 pt, under 14400 */
-static const double kMaxTiles = 20000.0;   /* tiles of the home print's grid (a 40 x 30 m sheet of A4) */
 static const double kMinPage = 1250.0;     /* a page cut at a gap is at least this long */
 
 /* An item's extent along one axis. */
@@ -499,7 +484,7 @@ static void draw_part_label(cairo_t *cr, const double *region, int32_t part, int
     snprintf(text, sizeof text, "part %d of %d of the 1:1 sheet (a PDF page holds at most 5.08 m): join at the "
              "cut edges", (int)part, (int)parts);
     cairo_set_source_rgb(cr, 0.3, 0.3, 0.3);
-    draw_text(cr, region[0] + 4, region[3] - 6, 4.0, text);
+    pdf_text(cr, region[0] + 4, region[3] - 6, 4.0, text);
 }
 
 pz_status pz_export_write_pdf(FILE *file, const pz_export_inputs *inputs, const char *name, pz_ctx *ctx)
@@ -519,8 +504,8 @@ pz_status pz_export_write_pdf(FILE *file, const pz_export_inputs *inputs, const 
     }
     pdf_stream stream = {file, 0};
     cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(
-        write_stream, &stream, (regions[2] - regions[0]) * PT_PER_MM, (regions[3] - regions[1]) * PT_PER_MM);
-    set_metadata(surface, inputs->pieces, "pattern, 1:1");
+        pdf_write_stream, &stream, (regions[2] - regions[0]) * PT_PER_MM, (regions[3] - regions[1]) * PT_PER_MM);
+    pdf_set_metadata(surface, inputs->pieces, "pattern, 1:1");
     cairo_t *cr = cairo_create(surface);
     for (int32_t k = 0; k < parts; ++k) {
         const double *region = &regions[4 * k];
@@ -540,308 +525,5 @@ pz_status pz_export_write_pdf(FILE *file, const pz_export_inputs *inputs, const 
     if (regions != whole)
         free(regions);
     free(sheet.items);
-    return finish(surface, cr, &stream, name, ctx);
-}
-
-/* ------------------------------------------------------------------ tiles */
-
-typedef struct tiling {
-    double paper[2];           /* mm, portrait */
-    double printable[2];
-    double step[2];            /* printable minus the overlap */
-    int32_t columns, rows;
-    uint8_t *inked;            /* rows x columns */
-    int32_t page_count;        /* inked tiles */
-} tiling;
-
-/* The sheet region of tile (row, column): rows count from the top of the sheet. */
-static void tile_region(const tiling *tiling, const sheet *sheet, int32_t row, int32_t column, double lo[2],
-                        double hi[2])
-{
-    lo[0] = column * tiling->step[0];
-    hi[0] = lo[0] + tiling->printable[0];
-    hi[1] = sheet->height - row * tiling->step[1];
-    lo[1] = hi[1] - tiling->printable[1];
-}
-
-/* 1 when segment a-b meets the box (Liang-Barsky clipping). */
-static int segment_meets_box(const double *a, const double *b, const double lo[2], const double hi[2])
-{
-    double t0 = 0, t1 = 1, d[2] = {b[0] - a[0], b[1] - a[1]};
-    for (int axis = 0; axis < 2; ++axis) {
-        double p[2] = {-d[axis], d[axis]}, q[2] = {a[axis] - lo[axis], hi[axis] - a[axis]};
-        for (int k = 0; k < 2; ++k) {
-            if (p[k] == 0) {
-                if (q[k] < 0)
-                    return 0;
-            } else {
-                double t = q[k] / p[k];
-                if (p[k] < 0)
-                    t0 = fmax(t0, t);
-                else
-                    t1 = fmin(t1, t);
-            }
-        }
-    }
-    return t0 <= t1;
-}
-
-/* 1 when the closed polygon (offset) has ink in the box: an edge crosses it, or it covers the box. */
-static int polygon_meets_box(const double *points, int32_t n, const double offset[2], const double lo[2],
-                             const double hi[2])
-{
-    double centre[2] = {(lo[0] + hi[0]) / 2 - offset[0], (lo[1] + hi[1]) / 2 - offset[1]};
-    int inside = 0;
-    for (int32_t i = 0, j = n - 1; i < n; j = i++) {
-        double a[2] = {points[2 * i] + offset[0], points[2 * i + 1] + offset[1]};
-        double b[2] = {points[2 * j] + offset[0], points[2 * j + 1] + offset[1]};
-        if (segment_meets_box(a, b, lo, hi))
-            return 1;
-        const double *p = &points[2 * i], *q = &points[2 * j];
-        if ((p[1] > centre[1]) != (q[1] > centre[1]) &&
-            centre[0] < (q[0] - p[0]) * (centre[1] - p[1]) / (q[1] - p[1]) + p[0])
-            inside = !inside;
-    }
-    return inside;
-}
-
-static int tile_inked(const pz_pieces *pieces, const sheet *sheet, const double lo[2], const double hi[2])
-{
-    double title_lo[2] = {kPieceGap, sheet->height - kTitleBand};
-    double title_hi[2] = {sheet->width / 2, sheet->height - kTitleBand + 10};
-    if (boxes_meet(lo, hi, title_lo, title_hi))
-        return 1;
-    for (int32_t i = 0; i < sheet->item_count; ++i) {
-        const sheet_item *item = &sheet->items[i];
-        if (!boxes_meet(lo, hi, item->lo, item->hi))
-            continue;
-        if (item->piece < 0)
-            return 1;
-        const pz_piece *piece = &pieces->pieces[item->piece];
-        if (polygon_meets_box(piece->cut, piece->cut_count, item->offset, lo, hi))
-            return 1;
-    }
-    return 0;
-}
-
-/* ASCII case-insensitive equality. */
-static int same_word(const char *a, const char *b)
-{
-    for (; *a && *b; ++a, ++b)
-        if (tolower((unsigned char)*a) != tolower((unsigned char)*b))
-            return 0;
-    return *a == *b;
-}
-
-pz_status pz_export_check_tiled_area(double area_mm2, const char *paper, const char *name, pz_ctx *ctx)
-{
-    double width = paper && same_word(paper, "letter") ? 215.9 : 210.0;
-    double height = paper && same_word(paper, "letter") ? 279.4 : 297.0;
-    double tile_mm2 = (width - 2 * kPaperMargin - kOverlap) * (height - 2 * kPaperMargin - kOverlap);
-    if (!(area_mm2 > 2.0 * kMaxTiles * tile_mm2))
-        return PZ_OK;
-    return pz_error(ctx, PZ_ERR_DATA,
-                    "%s: %.0f m2 of garment cannot fit in %d pages of pattern-tiled.pdf; is the garment in the right "
-                    "units (--units)?",
-                    name, area_mm2 * 1e-6, (int)kMaxTiles);
-}
-
-static pz_status tiling_build(const pz_export_inputs *inputs, const sheet *sheet, tiling *out, pz_ctx *ctx)
-{
-    memset(out, 0, sizeof *out);
-    const char *paper = inputs->options && inputs->options->paper ? inputs->options->paper : "a4";
-    int letter = same_word(paper, "letter");
-    if (!letter && !same_word(paper, "a4"))
-        return pz_error(ctx, PZ_ERR_USAGE, "pattern-tiled.pdf: paper '%s' is not a4 or letter", paper);
-    out->paper[0] = letter ? 215.9 : 210.0;
-    out->paper[1] = letter ? 279.4 : 297.0;
-    for (int d = 0; d < 2; ++d) {
-        out->printable[d] = out->paper[d] - 2 * kPaperMargin;
-        out->step[d] = out->printable[d] - kOverlap;
-    }
-    out->columns = (int32_t)ceil((sheet->width - kOverlap) / out->step[0]);
-    out->rows = (int32_t)ceil((sheet->height - kOverlap) / out->step[1]);
-    out->columns = out->columns < 1 ? 1 : out->columns;
-    out->rows = out->rows < 1 ? 1 : out->rows;
-    /* A pattern no printer would tile (a garment read in the wrong units: 90 m tall) is refused, not drawn
-     * for ever: a home print of more than kMaxTiles pages is not a pattern anyone prints. */
-    if ((double)out->rows * (double)out->columns > kMaxTiles)
-        return pz_error(ctx, PZ_ERR_DATA,
-                        "pattern-tiled.pdf: the pattern is %.0f x %.0f mm, %d x %d pages: more than %d; is the garment "
-                        "in the right units (--units)?",
-                        sheet->width, sheet->height, (int)out->rows, (int)out->columns, (int)kMaxTiles);
-    out->inked = calloc((size_t)out->rows * (size_t)out->columns, 1);
-    if (!out->inked)
-        return pz_error(ctx, PZ_ERR_NOMEM, "pdf: out of memory");
-    for (int32_t r = 0; r < out->rows; ++r)
-        for (int32_t c = 0; c < out->columns; ++c) {
-            double lo[2], hi[2];
-            tile_region(out, sheet, r, c, lo, hi);
-            /* Ink only in the band shared with the tile above or to the left is printed there already. */
-            if (r > 0)
-                hi[1] -= kOverlap;
-            if (c > 0)
-                lo[0] += kOverlap;
-            uint8_t inked = (uint8_t)tile_inked(inputs->pieces, sheet, lo, hi);
-            out->inked[r * out->columns + c] = inked;
-            out->page_count += inked;
-        }
-    return PZ_OK;
-}
-
-/* Page 1: the sheet scaled to fit, the tile grid over it, each tile's row and column. */
-static void draw_cover(cairo_t *cr, const pz_export_inputs *inputs, const sheet *sheet, const tiling *tiling)
-{
-    double grid_w = tiling->columns * tiling->step[0] + kOverlap, grid_h = tiling->rows * tiling->step[1] + kOverlap;
-    double room[2] = {tiling->printable[0], tiling->printable[1] - 40};
-    double scale = fmin(room[0] / grid_w, room[1] / grid_h);
-    double origin[2] = {kPaperMargin, kPaperMargin + 30};
-    char text[200];
-    cairo_save(cr);
-    cairo_scale(cr, PT_PER_MM, PT_PER_MM);
-    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
-    cairo_set_font_size(cr, 7);
-    cairo_move_to(cr, kPaperMargin, kPaperMargin + 8);
-    snprintf(text, sizeof text, "%s - size %s - tiled pattern", inputs->pieces->garment_name,
-             inputs->pieces->size_name);
-    show_text(cr, text);
-    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-    cairo_set_font_size(cr, 4);
-    cairo_move_to(cr, kPaperMargin, kPaperMargin + 16);
-    snprintf(text, sizeof text, "%d of %d x %d tiles printed (blank ones dropped), %s, 1 cm overlap: print at 100%%",
-             (int)tiling->page_count, (int)tiling->rows, (int)tiling->columns,
-             tiling->paper[0] > 211 ? "Letter" : "A4");
-    cairo_show_text(cr, text);
-    cairo_move_to(cr, kPaperMargin, kPaperMargin + 22);
-    cairo_show_text(cr, "Trim each page on its trim marks, overlap the dashed bands, check the 10 cm box.");
-
-    /* The sheet, scaled: y up inside the grid's box. */
-    cairo_save(cr);
-    cairo_translate(cr, origin[0], origin[1]);
-    cairo_scale(cr, scale, scale);
-    cairo_save(cr);
-    cairo_translate(cr, 0, grid_h);
-    cairo_scale(cr, 1, -1);
-    cairo_translate(cr, 0, grid_h - sheet->height); /* the sheet's top at the grid's top */
-    cairo_set_source_rgb(cr, 0.2, 0.2, 0.2);
-    cairo_set_line_width(cr, 0.6 / scale);
-    for (int32_t i = 0; i < sheet->item_count; ++i) {
-        const sheet_item *item = &sheet->items[i];
-        if (item->piece < 0) {
-            cairo_rectangle(cr, item->lo[0], item->lo[1], kScaleBox, kScaleBox);
-        } else {
-            const pz_piece *piece = &inputs->pieces->pieces[item->piece];
-            path_polyline(cr, piece->cut, piece->cut_count, item->offset, 1);
-        }
-        cairo_stroke(cr);
-    }
-    cairo_restore(cr);
-    cairo_set_line_width(cr, 0.3 / scale);
-    cairo_set_font_size(cr, 4.0 / scale);
-    for (int32_t r = 0; r < tiling->rows; ++r)
-        for (int32_t c = 0; c < tiling->columns; ++c) {
-            double x = c * tiling->step[0], y = r * tiling->step[1];
-            int inked = tiling->inked[r * tiling->columns + c];
-            cairo_rectangle(cr, x, y, tiling->printable[0], tiling->printable[1]);
-            if (!inked) {
-                cairo_set_source_rgba(cr, 0.5, 0.5, 0.5, 0.25);
-                cairo_fill_preserve(cr);
-            }
-            cairo_set_source_rgb(cr, 0, 0, inked ? 0.8 : 0.4);
-            cairo_stroke(cr);
-            snprintf(text, sizeof text, "%d,%d", (int)r + 1, (int)c + 1);
-            cairo_move_to(cr, x + 0.5 * tiling->step[0] - 6.0 / scale, y + 0.5 * tiling->step[1]);
-            cairo_show_text(cr, text);
-        }
-    cairo_restore(cr);
-    cairo_restore(cr);
-}
-
-/* Trim marks just outside the printable area's corners, the overlap bands, the label. */
-static void draw_tile_frame(cairo_t *cr, const tiling *tiling, int32_t row, int32_t column, int page, int pages)
-{
-    const double m = kPaperMargin, w = tiling->printable[0], h = tiling->printable[1], tick = 6.0, away = 1.0;
-    cairo_save(cr);
-    cairo_scale(cr, PT_PER_MM, PT_PER_MM);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_set_line_width(cr, 0.2);
-    const double corner[4][2] = {{m, m}, {m + w, m}, {m, m + h}, {m + w, m + h}};
-    for (int k = 0; k < 4; ++k) {
-        double sx = k % 2 ? 1 : -1, sy = k / 2 ? 1 : -1;
-        cairo_move_to(cr, corner[k][0] + sx * away, corner[k][1]);
-        cairo_line_to(cr, corner[k][0] + sx * (away + tick), corner[k][1]);
-        cairo_move_to(cr, corner[k][0], corner[k][1] + sy * away);
-        cairo_line_to(cr, corner[k][0], corner[k][1] + sy * (away + tick));
-    }
-    cairo_stroke(cr);
-    /* The bands the next tile covers (right and below), dashed. */
-    const double dash[2] = {2.0, 2.0};
-    cairo_set_dash(cr, dash, 2, 0);
-    cairo_set_source_rgb(cr, 0.4, 0.4, 0.4);
-    if (column + 1 < tiling->columns) {
-        cairo_move_to(cr, m + w - kOverlap, m);
-        cairo_line_to(cr, m + w - kOverlap, m + h);
-    }
-    if (row + 1 < tiling->rows) {
-        cairo_move_to(cr, m, m + h - kOverlap);
-        cairo_line_to(cr, m + w, m + h - kOverlap);
-    }
-    cairo_stroke(cr);
-    cairo_set_dash(cr, NULL, 0, 0);
-    char label[96];
-    snprintf(label, sizeof label, "row %d col %d, page %d of %d", (int)row + 1, (int)column + 1, page, pages);
-    cairo_set_source_rgb(cr, 0, 0, 0);
-    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_NORMAL);
-    cairo_set_font_size(cr, 3.5);
-    cairo_move_to(cr, m + 8, m + h + 6);
-    cairo_show_text(cr, label);
-    cairo_restore(cr);
-}
-
-static void draw_tile(cairo_t *cr, const pz_export_inputs *inputs, const sheet *sheet, const tiling *tiling,
-                      int32_t row, int32_t column)
-{
-    double lo[2], hi[2];
-    tile_region(tiling, sheet, row, column, lo, hi);
-    cairo_save(cr);
-    cairo_rectangle(cr, kPaperMargin * PT_PER_MM, kPaperMargin * PT_PER_MM, tiling->printable[0] * PT_PER_MM,
-                    tiling->printable[1] * PT_PER_MM);
-    cairo_clip(cr);
-    /* Sheet point (lo[0], hi[1]) (the region's top-left) lands on the printable area's top-left. */
-    cairo_translate(cr, (kPaperMargin - lo[0]) * PT_PER_MM, (kPaperMargin - (sheet->height - hi[1])) * PT_PER_MM);
-    sheet_space(cr, sheet->height);
-    draw_sheet(cr, inputs, sheet, lo, hi);
-    cairo_restore(cr);
-}
-
-pz_status pz_export_write_pdf_tiled(FILE *file, const pz_export_inputs *inputs, const char *name, pz_ctx *ctx)
-{
-    sheet sheet;
-    pz_status status = sheet_build(inputs->pieces, &sheet, ctx);
-    if (status != PZ_OK)
-        return status;
-    tiling tiling;
-    if ((status = tiling_build(inputs, &sheet, &tiling, ctx)) != PZ_OK) {
-        free(sheet.items);
-        return status;
-    }
-    pdf_stream stream = {file, 0};
-    cairo_surface_t *surface = cairo_pdf_surface_create_for_stream(write_stream, &stream, tiling.paper[0] * PT_PER_MM,
-                                                                   tiling.paper[1] * PT_PER_MM);
-    set_metadata(surface, inputs->pieces, "tiled pattern");
-    cairo_t *cr = cairo_create(surface);
-    draw_cover(cr, inputs, &sheet, &tiling);
-    cairo_show_page(cr);
-    int page = 1, pages = tiling.page_count + 1;
-    for (int32_t r = 0; r < tiling.rows; ++r)
-        for (int32_t c = 0; c < tiling.columns; ++c) {
-            if (!tiling.inked[r * tiling.columns + c])
-                continue;
-            draw_tile(cr, inputs, &sheet, &tiling, r, c);
-            draw_tile_frame(cr, &tiling, r, c, ++page, pages);
-            cairo_show_page(cr);
-        }
-    free(tiling.inked);
-    free(sheet.items);
-    return finish(surface, cr, &stream, name, ctx);
+    return pdf_finish(surface, cr, &stream, name, ctx);
 }

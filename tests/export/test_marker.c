@@ -16,14 +16,17 @@
  *  - every garment of ../shared/data/garments (panels from its UVs where it
  *    has them, else one panel), LSCM-flattened, pieces from pz_pieces_build:
  *    the marker properties above, and every writer of this part (marker.svg,
- *    pattern.pdf, pattern-tiled.pdf, garment.glb, report.html) succeeds
- *    (skipped without the shared data).
+ *    pattern.pdf, pattern-tiled.pdf, garment.glb, report.html) succeeds;
+ *    pattern-tiled.pdf's layout has the properties of tiled_checks.h and at
+ *    most twice the pages the cut lines' area could fill (A4 tiles advance
+ *    180 x 267 mm; 1.16-1.78x today) (skipped without the shared data).
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #define _POSIX_C_SOURCE 200809L
 #include "fixture_export_b.h"
 #include "marker_checks.h"
+#include "tiled_checks.h"
 #include "io/io.h"
 #include "readers.h"
 
@@ -295,6 +298,15 @@ static void check_garment(const char *dir, const char *file)
         fclose(sink);
     }
     cJSON_Delete(report);
+    /* pattern-tiled.pdf's layout: its properties, and its pages against the fewest the cut lines could fill. */
+    int32_t pages = check_tiled_layout(pieces, "a4", file);
+    double area = 0;
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        area += pieces->pieces[p].mirrored ? 0 : pieces->pieces[p].area_mm2;
+    double bound = ceil(area / (180.0 * 267.0));
+    printf("%s: pattern-tiled.pdf %d pages, area bound %.0f (%.2fx)\n", file, (int)pages, bound, pages / bound);
+    CHECK(pages <= 2 * bound + 1, "%s: pattern-tiled.pdf has %d pages, more than twice the %.0f its cut lines could "
+          "fill", file, (int)pages, bound);
     pz_marker_free(&marker);
     pz_pieces_free(&pieces);
     pz_metrics_free(&metrics);

@@ -6,21 +6,24 @@
  *  - pattern.pdf is one page; the tiled PDF's pages are A4 or Letter as
  *    asked; a sheet larger than a PDF page may be (14400 pt, 5.08 m) is
  *    several 1:1 pages, each within that, covering the sheet;
- *  - the 10 cm scale box measures 100 mm, on the sheet and on the first
- *    tile: rendered at 254 dpi (0.1 mm per pixel, the spacing of its edges
- *    measured, within 0.2 mm), and in the PDF's own units (a 283.465 pt
- *    rectangle in a content stream drawn without scaling, within 0.01 mm:
- *    tests/export/pdf_scale_box.py);
- *  - the tiled PDF has the cover plus one page per inked tile: the cover's
- *    "K of R x C tiles printed" matches pdfinfo, some tiles were dropped,
- *    every tile with ink on the rendered 1:1 sheet has its page,
- *    and every tile page has ink inside its printable area (rendered and
- *    counted), its trim marks (the eight corner ticks found in the
- *    rendered margin) and its "row R col C, page N of M" label;
+ *  - the 10 cm scale box measures 100 mm, on the sheet and on page 2 of the
+ *    tiled PDF where its layout put it: rendered at 254 dpi (0.1 mm per
+ *    pixel, the spacing of its edges measured, within 0.2 mm), and in the
+ *    PDF's own units (a 283.465 pt rectangle in a content stream drawn
+ *    without scaling, within 0.01 mm: tests/export/pdf_scale_box.py);
+ *  - the tiled PDF's layout has every property of tiled_checks.h (pieces
+ *    whole where they fit a page, nothing overlapping, every cut line
+ *    printed, no blank tile) and the PDF is its pages plus the cover; every
+ *    page has ink inside its printable area (rendered and counted), its trim
+ *    marks (the eight corner ticks found in the rendered margin) and its
+ *    "page N of M" label; every piece is named in it;
+ *  - packing: 20 pieces of 80 x 120 mm take 5 A4 pages (four a page) and the
+ *    scale box a sixth; two 300 x 100 mm pieces share their two tiles;
  *  - piece names and "Cut 2 mirrored" are in the text; a Latin-1 name is
  *    shown with '?' for its non-UTF-8 bytes (cairo would refuse it);
  *  - with SOURCE_DATE_EPOCH two writes a second apart are byte-identical;
- *  - an unknown paper is PZ_ERR_USAGE; a stream that cannot be written gives
+ *  - an unknown paper is PZ_ERR_USAGE, a 100 x 100 m piece PZ_ERR_DATA
+ *    (before any raster is made); a stream that cannot be written gives
  *    PZ_ERR_CREATE.
  * Pieces: 12 hand-made rectangles and L-shapes, and pz_pieces_build's for
  * the 4 panels of a flattened bodice (notches, dart lines).
@@ -30,6 +33,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "fixture_export_b.h"
 #include "readers.h"
+#include "tiled_checks.h"
 
 #include <stdio.h>
 #include <unistd.h>
@@ -186,41 +190,6 @@ static int has_trim_marks(const char *path, int page, const double paper[2])
     return found == 8;
 }
 
-/*
- * No tile with ink was dropped: pattern.pdf (the same sheet) rendered at 20 dpi, cut into the tile grid
- * (printable = paper - 20 mm, step = printable - 10 mm), and every tile whose own part (without the bands
- * it shares with the tiles above and to the left, shrunk by 2 mm against antialiasing) has a dark pixel
- * must have a page ("row R col C" in the tiled PDF's text).
- */
-static void check_no_inked_tile_dropped(const char *sheet_path, const char *text, int letter, int rows, int columns)
-{
-    enum { kMaxTiles = 64 };
-    REQUIRE(rows > 0 && columns > 0 && rows <= kMaxTiles && columns <= kMaxTiles, "%d x %d tiles", rows, columns);
-    static char printed[kMaxTiles][kMaxTiles];
-    memset(printed, 0, sizeof printed);
-    int r, c;
-    for (const char *at = text; (at = strstr(at, "row ")); at += 4)
-        if (sscanf(at, "row %d col %d", &r, &c) == 2 && r >= 1 && c >= 1 && r <= rows && c <= columns)
-            printed[r - 1][c - 1] = 1;
-    int width, height;
-    unsigned char *pixels = render(sheet_path, 1, 20, 0, 0, 0, &width, &height);
-    double ppm = 20 / 25.4, printable[2] = {letter ? 195.9 : 190.0, letter ? 259.4 : 277.0};
-    int missing = 0;
-    for (r = 0; r < rows; ++r)
-        for (c = 0; c < columns; ++c) {
-            double x0 = c * (printable[0] - 10) + (c > 0 ? 10 : 0) + 2, x1 = c * (printable[0] - 10) + printable[0] - 2;
-            double y0 = r * (printable[1] - 10) + (r > 0 ? 10 : 0) + 2, y1 = r * (printable[1] - 10) + printable[1] - 2;
-            int dark = 0;
-            for (int y = (int)ceil(y0 * ppm); y <= (int)floor(y1 * ppm) && y < height; ++y)
-                for (int x = (int)ceil(x0 * ppm); x <= (int)floor(x1 * ppm) && x < width; ++x)
-                    dark += pixels[y * width + x] < 128;
-            if (dark > 0 && !printed[r][c])
-                ++missing;
-        }
-    free(pixels);
-    CHECK(missing == 0, "%s: %d tiles with ink have no page", sheet_path, missing);
-}
-
 static void write_pdf(pz_status (*writer)(FILE *, const pz_export_inputs *, const char *, pz_ctx *),
                       const pz_export_inputs *inputs, const char *path)
 {
@@ -230,8 +199,8 @@ static void write_pdf(pz_status (*writer)(FILE *, const pz_export_inputs *, cons
     REQUIRE(fclose(file) == 0, "close %s", path);
 }
 
-/* Writes both PDFs of `pieces` and checks everything above. */
-static void check_pdfs(const pz_pieces *pieces, const char *paper, const char *tag, int expect_dropped)
+/* Writes both PDFs of `pieces` and checks everything above; the tiled PDF's pages (cover not counted). */
+static int32_t check_pdfs(const pz_pieces *pieces, const char *paper, const char *tag)
 {
     pz_export_options options;
     pz_export_options_default(&options);
@@ -250,7 +219,16 @@ static void check_pdfs(const pz_pieces *pieces, const char *paper, const char *t
     int letter = strcmp(paper, "letter") == 0;
     CHECK(fabs(size[0] - (letter ? 612 : 595.28)) < 0.5 && fabs(size[1] - (letter ? 792 : 841.89)) < 0.5,
           "%s: page size %g x %g", tiled_path, size[0], size[1]);
-    CHECK(has_scale_box(tiled_path, 2, 20, 20), "%s: no 100 mm scale box on the first tile", tiled_path);
+    /* The layout's properties (tiled_checks.h), and the PDF has its pages: the cover and one per layout page. */
+    int32_t laid = check_tiled_layout(pieces, paper, tag);
+    CHECK(pages == laid + 1, "%s: %d pages for %d laid out and the cover", tiled_path, pages, (int)laid);
+    /* The scale box on the first page after the cover, where the layout put it: 10 mm margins, y down. */
+    tiled_layout layout;
+    REQUIRE_OK(tiled_layout_build(pieces, paper, &layout, &ctx), ctx);
+    CHECK(layout.items[0].page == 0, "%s: the scale box is on page %d", tag, (int)layout.items[0].page + 2);
+    double box_left = 10 + layout.items[0].at[0], box_top = 10 + layout.printable[1] - (layout.items[0].at[1] + 100);
+    tiled_layout_free(&layout);
+    CHECK(has_scale_box(tiled_path, 2, box_left - 10, box_top - 10), "%s: no 100 mm scale box on page 2", tiled_path);
     /* And in the PDF's own units: a 283.465 pt rectangle drawn without scaling (pdf_scale_box.py). */
     const char *source = getenv("PZ_SOURCE_DIR");
     if (source && have_python) {
@@ -268,23 +246,19 @@ static void check_pdfs(const pz_pieces *pieces, const char *paper, const char *t
     snprintf(command, sizeof command, "pdftotext -layout '%s' -", tiled_path);
     char *text = run(command);
     REQUIRE(text, "pdftotext failed on %s", tiled_path);
-    int printed = 0, rows = 0, columns = 0;
-    const char *cover = strstr(text, " tiles printed");
-    while (cover && cover > text && cover[-1] != '\n')
-        --cover;
-    CHECK(cover && sscanf(cover, "%d of %d x %d tiles printed", &printed, &rows, &columns) == 3, "no cover line");
-    CHECK(pages == printed + 1, "%s: %d pages for %d printed tiles", tiled_path, pages, printed);
-    if (expect_dropped)
-        CHECK(printed < rows * columns, "%s: no blank tile dropped (%d of %d x %d)", tag, printed, rows, columns);
-    check_no_inked_tile_dropped(sheet_path, text, letter, rows, columns);
     for (int page = 2; page <= pages; ++page) {
         char label[64];
         snprintf(label, sizeof label, "page %d of %d", page, pages);
         CHECK(strstr(text, label) != NULL, "%s: no '%s'", tag, label);
         CHECK(ink_inside(tiled_path, page) > 0, "%s: page %d is blank", tag, page);
-        double paper[2] = {letter ? 215.9 : 210.0, letter ? 279.4 : 297.0};
-        CHECK(has_trim_marks(tiled_path, page, paper), "%s: page %d has no trim marks", tag, page);
+        double paper_mm[2] = {letter ? 215.9 : 210.0, letter ? 279.4 : 297.0};
+        CHECK(has_trim_marks(tiled_path, page, paper_mm), "%s: page %d has no trim marks", tag, page);
     }
+    /* Every piece is named on the cover (and where it is). */
+    for (int32_t p = 0; p < pieces->piece_count; ++p)
+        if (!pieces->pieces[p].mirrored && !strchr(pieces->pieces[p].name, '\xe9'))
+            CHECK(strstr(text, pieces->pieces[p].name) != NULL, "%s: %s not in the tiled PDF", tag,
+                  pieces->pieces[p].name);
     free(text);
 
     snprintf(command, sizeof command, "pdftotext '%s' -", sheet_path);
@@ -296,7 +270,32 @@ static void check_pdfs(const pz_pieces *pieces, const char *paper, const char *t
     CHECK(strstr(tag, "boxes") == NULL || strstr(text, "dos_d?coup?") != NULL, "Latin-1 name not shown with '?'");
     CHECK(strstr(text, "10 cm") != NULL, "scale box label");
     free(text);
-    printf("%s: tiled on %s: %d of %d x %d tiles printed, %d pages\n", tag, paper, printed, rows, columns, pages);
+    printf("%s: tiled on %s: %d pages\n", tag, paper, pages);
+    return laid;
+}
+
+/*
+ * Packing: 20 pieces of 80 x 120 mm go four to an A4 page (two by two, 6 mm apart: the best any packing does,
+ * five would need 20 % more room than a page has), so 5 pages, and the scale box on a sixth; and two pieces of
+ * 300 x 100 mm, each two tiles wide on its own, share the same two tiles on the sheet (one above the other) with
+ * the scale box on a page of its own: 3 pages, where printing each on its own would take 5.
+ */
+static void test_packing(void)
+{
+    pz_pieces *small = fixture_pieces_alloc(20);
+    for (int32_t p = 0; p < 20; ++p) {
+        char name[32];
+        snprintf(name, sizeof name, "small_%d", (int)p);
+        fixture_piece_box(&small->pieces[p], p, name, 60, 100, 0); /* cut line: 10 mm more on every side */
+    }
+    CHECK(check_pdfs(small, "a4", "packing") == 6, "20 pieces of 80 x 120 mm: not 6 pages");
+    fixture_pieces_free(small);
+
+    pz_pieces *long_pieces = fixture_pieces_alloc(2);
+    for (int32_t p = 0; p < 2; ++p)
+        fixture_piece_box(&long_pieces->pieces[p], p, p ? "strip_b" : "strip_a", 280, 80, 0);
+    CHECK(check_pdfs(long_pieces, "a4", "sharing") == 3, "two 300 x 100 mm pieces do not share their tiles");
+    fixture_pieces_free(long_pieces);
 }
 
 static void test_boxes(void)
@@ -311,7 +310,7 @@ static void test_boxes(void)
     }
     /* A name in Latin-1 (not UTF-8), as a file may give it: shown with '?', the PDF still written. */
     snprintf(pieces->pieces[3].name, sizeof pieces->pieces[3].name, "dos_d\xe9" "coup\xe9");
-    check_pdfs(pieces, "a4", "boxes", 1);
+    check_pdfs(pieces, "a4", "boxes");
     char command[600];
     snprintf(command, sizeof command, "pdftotext %s/boxes-pattern.pdf -", dir);
     char *text = run(command);
@@ -328,6 +327,19 @@ static void test_boxes(void)
     CHECK(pz_export_write_pdf_tiled(sink, &a3_inputs, "tiled.pdf", &ctx) == PZ_ERR_USAGE && strstr(ctx.error, "a3"),
           "%s", ctx.error);
     fclose(sink);
+
+    /* A piece of 100 x 100 m (a garment read in the wrong units) is refused before any raster is made. */
+    pz_pieces *huge = fixture_pieces_alloc(1);
+    fixture_piece_box(&huge->pieces[0], 0, "huge", 100000, 100000, 0);
+    pz_export_options huge_options;
+    pz_export_options_default(&huge_options);
+    pz_export_inputs huge_inputs = {.pieces = huge, .options = &huge_options};
+    sink = tmpfile();
+    REQUIRE(sink, "tmpfile");
+    CHECK(pz_export_write_pdf_tiled(sink, &huge_inputs, "tiled.pdf", &ctx) == PZ_ERR_DATA && strstr(ctx.error, "units"),
+          "a 100 m piece: %s", ctx.error);
+    fclose(sink);
+    fixture_pieces_free(huge);
 
     /* With SOURCE_DATE_EPOCH the same pattern gives the same bytes (cairo would stamp the time). */
     pz_export_options same;
@@ -453,7 +465,7 @@ static void test_bodice(void)
     fixture_pattern fixture;
     fixture_pattern_build(&fixture, 3000, 4);
     fixture_pattern_export(&fixture);
-    check_pdfs(fixture.pieces, "letter", "bodice", 0);
+    check_pdfs(fixture.pieces, "letter", "bodice");
     fixture_pattern_free(&fixture);
 }
 
@@ -468,6 +480,7 @@ int main(void)
         test_skip_part("the PDF's units (PZ_SOURCE_DIR unset: no pdf_scale_box.py)");
     REQUIRE(mkdtemp(dir), "mkdtemp");
     test_boxes();
+    test_packing();
     test_wide_sheet();
     test_bodice();
     char command[300];
