@@ -184,6 +184,8 @@ void pl_segmenter_give_plane(pl_segmenter *segmenter, const pz_symmetry *symmetr
 void pl_segmenter_take_outlook(pl_segmenter *segmenter, const pl_segmenter *from);
 /** 1 when the layout last chosen was made with the plane (mirrored). */
 int pl_segmenter_plane_used(const pl_segmenter *segmenter);
+/* 1 when the run's S was out of reach and a looser setting's layout is written (issue 15). */
+int pl_segmenter_wrote_looser(const pl_segmenter *segmenter);
 
 /* ---------------------------------------------------------------- flatten.c */
 

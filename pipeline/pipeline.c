@@ -232,6 +232,19 @@ static pz_status choose_panels(pipeline_run *run, pz_result *result, int round, 
     return status;
 }
 
+/*
+ * Whether the layout on the symmetric garment is kept: when it uses the
+ * plane, or when the run's S was out of reach and a looser setting's sound
+ * layout is written (issue 15: laying the garment out again as loaded would
+ * repeat the probe and the looser layouts, about twice the time, for a
+ * garment within the snap distance of this one; the report names the
+ * symmetrized distance).
+ */
+static int keeps_symmetric_garment(const pipeline_run *run)
+{
+    return pl_segmenter_plane_used(run->segmenter) || pl_segmenter_wrote_looser(run->segmenter);
+}
+
 /* Panels, pattern and flattening, again while the segmentation's verdict rounds reject the flattening. */
 static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ctx)
 {
@@ -252,7 +265,7 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
         status = choose_panels(run, result, round, ctx);
         result->timings.panels += pz_elapsed_ms(mark, pz_seconds());
         /* The symmetric garment without the plane's layout is not kept: no flattening of it (redo_as_loaded). */
-        if (status == PZ_OK && run->symmetric.active && !pl_segmenter_plane_used(run->segmenter))
+        if (status == PZ_OK && run->symmetric.active && !keeps_symmetric_garment(run))
             return PZ_OK;
         if (status == PZ_OK)
             status = pz_pattern_build(run->garment.mesh, run->choice.face_panel, run->choice.extra_cuts,
@@ -369,7 +382,7 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
     /* The symmetric garment is kept with a layout that uses the plane; a piece budget's mirrored layout (no
      * verdict rounds drop its plane) also only when its flattening meets the goals. */
     if (status == PZ_OK && run.symmetric.active &&
-        (!pl_segmenter_plane_used(run.segmenter) ||
+        (!keeps_symmetric_garment(&run) ||
          (result->options.segment.max_pieces > 0 && pl_symmetric_misses_goals(result, run.garment.mesh, ctx))))
         status = redo_as_loaded(&run, result, ctx);
     if (status == PZ_OK)

@@ -348,6 +348,10 @@ static pz_status choose_symmetry(pl_segmenter *seg, const pz_mesh *garment, cons
         goals->pieces_with = with->panel_count;
         goals->pieces_without = without->panel_count;
         goals->symmetry_used = symmetry_worth_it(with->panel_count, without->panel_count);
+        /* Fewer panels are no gain when they miss the goals the layout without the plane meets (a half that
+         * stopped short of S: the 7K bodice at S = 0.01 gave 5 mirrored panels over S against 11 that met it). */
+        if (!with->goals_met && without->goals_met && seg->options->segment.max_pieces <= 0)
+            goals->symmetry_used = 0;
         /* A piece budget is the designer's count: the mirrored layout must meet it with mirrored merges only
          * (a mirror pair counts as two) when the layout without the plane meets it. */
         if (seg->options->segment.max_pieces > 0 && without->budget_met &&
@@ -1117,6 +1121,11 @@ void pl_segmenter_take_outlook(pl_segmenter *seg, const pl_segmenter *from)
 {
     if (from)
         seg->outlook = from->outlook;
+}
+
+int pl_segmenter_wrote_looser(const pl_segmenter *seg)
+{
+    return seg && seg->written_looser_strain > 0;
 }
 
 int pl_segmenter_plane_used(const pl_segmenter *seg)
