@@ -20,7 +20,7 @@
 
 const char pz_cli_flatten_usage[] =
     "usage: panelize flatten MESH... -o DIR [--panels FILE|uv] [--seams FILE]...\n"
-    "           [--darts [K:]FILE]... [--grain X,Y,Z] [--pose FILE]...\n"
+    "           [--darts [K:]FILE]... [--grain X,Y,Z] [--grain-hints FILE] [--pose FILE]...\n"
     "           [--backend textile|lscm|wirewarp|springmass] [--scheme global|progressive]\n"
     "           [--relax heap|full] [--features FILE] [--iterations N] [--weights S,R,D,M]\n"
     "           [--fabric KSU,KSV,KR] [--seam-allowance MM] [--hem-allowance MM]\n"
@@ -59,6 +59,9 @@ const char pz_cli_flatten_usage[] =
     "                       (repeatable)\n"
     "  --grain X,Y,Z        the 3D direction of the warp (default: the garment's\n"
     "                       vertical, +y or +z, whichever it is taller along)\n"
+    "  --grain-hints FILE   JSON {\"curves\": [[[x,y,z], ...], ...]} in the mesh's\n"
+    "                       units: short strokes along which the warp runs in the\n"
+    "                       panel each lies on (its own grain, e.g. a bias cut)\n"
     "  --pose FILE          an extra pose (repeatable; one MESH only)\n"
     "  --backend B          textile (default), lscm, wirewarp (length-exact\n"
     "                       boundaries) or springmass (with an energy map)\n"

@@ -43,7 +43,7 @@ static const pz_cli_command command_table[] = {
      PZ_CLI_OPT_COMMON | PZ_CLI_OPT_UNITS | PZ_CLI_OPT_POSE | PZ_CLI_OPT_REPAIR | PZ_CLI_OPT_OUTPUT |
          PZ_CLI_OPT_PANELS | PZ_CLI_OPT_SEAMS | PZ_CLI_OPT_DARTS | PZ_CLI_OPT_GRAIN | PZ_CLI_OPT_BACKEND |
          PZ_CLI_OPT_ITERATIONS | PZ_CLI_OPT_WEIGHTS | PZ_CLI_OPT_FABRIC | PZ_CLI_OPT_SCHEME |
-         PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES | PZ_CLI_OPT_EXPORT,
+         PZ_CLI_OPT_RELAX | PZ_CLI_OPT_FEATURES | PZ_CLI_OPT_GRAIN_HINTS | PZ_CLI_OPT_EXPORT,
      pz_cli_flatten},
     {"run", "the whole pipeline: garment in, panels, darts and a sewable pattern out",
      pz_cli_run_usage, PZ_CLI_OPT_RUN, pz_cli_run},
@@ -128,6 +128,7 @@ static const option_spec option_table[] = {
     {"port", 0, PZ_CLI_OPT_PORT, 1},
     {"listen", 0, PZ_CLI_OPT_LISTEN, 1},
     {"root", 0, PZ_CLI_OPT_ROOT, 1},
+    {"grain-hints", 0, PZ_CLI_OPT_GRAIN_HINTS, 1},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 

@@ -160,6 +160,10 @@ pz_status pz_cli_pipeline_options(const pz_cli_args *args, pz_run_options *optio
     pz_status status = parse_flatten_options(args, &options->flatten, ctx);
     if (status == PZ_OK)
         status = parse_export_options(args, options, ctx);
+    const char *hints = pz_cli_value(args, PZ_CLI_OPT_GRAIN_HINTS);
+    if (status == PZ_OK && hints && !*hints)
+        status = pz_error(ctx, PZ_ERR_USAGE, "%s: --grain-hints: empty file name", args->command);
+    options->grain_hints_path = hints;
     if (status == PZ_OK) /* the ranges: the library's, shared with the Python package */
         status = pz_run_options_check(options, "flatten", PZ_OPTION_FLAG, ctx);
     if (status == PZ_OK) {

@@ -28,10 +28,11 @@ double pz_param_face_frame(const double *pos, const int32_t *face, double local[
 
 /* The rotation angle (radians, counter-clockwise) that turns the
  * area-weighted projected grain of the given faces (face_ids may be NULL: the
- * first face_count faces) onto +v; 0 when the grain is nearly normal to all
- * of them. */
+ * first face_count faces), each turned by `turn` about its face normal (0:
+ * the projected grain itself), onto +v; 0 when the grain is nearly normal to
+ * all of them. */
 double pz_param_grain_angle(const pz_mesh *mesh, const int32_t *face_ids, int32_t face_count, const double grain[3],
-                            const double *uv);
+                            double turn, const double *uv);
 
 /* Rotates the uv of the listed vertices by `angle` about their centroid. */
 void pz_param_rotate_vertices(const int32_t *vertex_ids, int32_t vertex_count, double angle, double *uv);

@@ -86,8 +86,9 @@ double pz_param_face_frame(const double *pos, const int32_t *face, double local[
  * normal to all of them (see the header). mesh: 3D positions and faces.
  */
 double pz_param_grain_angle(const pz_mesh *mesh, const int32_t *face_ids, int32_t face_count, const double grain[3],
-                            const double *uv)
+                            double turn, const double *uv)
 {
+    double turn_cos = cos(turn), turn_sin = sin(turn);
     double glen = sqrt(grain[0] * grain[0] + grain[1] * grain[1] + grain[2] * grain[2]);
     if (glen <= 0)
         return 0;
@@ -101,8 +102,10 @@ double pz_param_grain_angle(const pz_mesh *mesh, const int32_t *face_ids, int32_
             continue;
         area_sum += area;
         /* The grain in the frame: its projection onto the plane is (a, b). */
-        double a = g[0] * e1[0] + g[1] * e1[1] + g[2] * e1[2];
-        double b = g[0] * e2[0] + g[1] * e2[1] + g[2] * e2[2];
+        double a0 = g[0] * e1[0] + g[1] * e1[1] + g[2] * e1[2];
+        double b0 = g[0] * e2[0] + g[1] * e2[1] + g[2] * e2[2];
+        /* Turned about the normal: (e1, e2, n) is right-handed (pz_param_face_frame). */
+        double a = turn_cos * a0 - turn_sin * b0, b = turn_sin * a0 + turn_cos * b0;
         double projected = sqrt(a * a + b * b);
         if (projected < 1e-9)
             continue;
@@ -626,7 +629,7 @@ pz_status pz_param_lscm(const pz_mesh *disk, const double grain[3], double *uv, 
     if (status)
         return status;
     normalize_piece(disk, uv);
-    double angle = pz_param_grain_angle(disk, NULL, disk->face_count, grain ? grain : up, uv);
+    double angle = pz_param_grain_angle(disk, NULL, disk->face_count, grain ? grain : up, 0, uv);
     if (angle != 0) {
         double c = cos(angle), s = sin(angle);
         for (int32_t v = 0; v < disk->vertex_count; ++v) {
@@ -680,6 +683,43 @@ pz_status pz_param_panel_faces(const pz_pattern *pattern, int32_t **offsets, int
         (*order)[fill[pattern->face_panel[f]]++] = f;
     free(fill);
     return PZ_OK;
+}
+
+pz_status pz_param_turn_to_panel_grain(const pz_pattern *pattern, const double grain[3], const double *panel_turn,
+                                       double *uv, pz_ctx *ctx)
+{
+    if (!panel_turn)
+        return PZ_OK;
+    int32_t *offsets = NULL, *order = NULL;
+    pz_status status = pz_param_panel_faces(pattern, &offsets, &order, ctx);
+    if (status)
+        return status;
+    const pz_mesh *mesh = pattern->mesh;
+    int32_t *vertices = malloc(((size_t)mesh->vertex_count + 1) * sizeof(int32_t));
+    uint8_t *seen = calloc((size_t)mesh->vertex_count + 1, 1);
+    if (!vertices || !seen)
+        status = pz_error(ctx, PZ_ERR_NOMEM, "pattern: out of memory turning pieces to their grain");
+    for (int32_t p = 0; status == PZ_OK && p < pattern->panel_count; ++p) {
+        if (panel_turn[p] == 0 || !isfinite(panel_turn[p]))
+            continue;
+        const int32_t *faces = order + offsets[p];
+        int32_t face_count = offsets[p + 1] - offsets[p], vertex_count = 0;
+        for (int32_t i = 0; i < face_count; ++i)
+            for (int k = 0; k < 3; ++k) {
+                int32_t v = mesh->faces[3 * (size_t)faces[i] + k];
+                if (!seen[v])
+                    seen[v] = 1, vertices[vertex_count++] = v;
+            }
+        pz_param_rotate_vertices(vertices, vertex_count,
+                                 pz_param_grain_angle(mesh, faces, face_count, grain, panel_turn[p], uv), uv);
+        for (int32_t i = 0; i < vertex_count; ++i)
+            seen[vertices[i]] = 0;
+    }
+    free(vertices);
+    free(seen);
+    free(offsets);
+    free(order);
+    return status;
 }
 
 /* Places the pieces on shelves with a 20 mm gap (see the header). */

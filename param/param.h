@@ -169,6 +169,12 @@ typedef struct pz_textile_options {
      * equal lengths only and the iterations run again (at most twice).
      * docs/param.md, "The strain goal". `panelize run` passes --max-strain. */
     double strain_limit;
+    /* Each panel's warp turned from `grain` (pattern->panel_count angles in radians, borrowed for the set-up;
+     * 0: along the grain), or NULL: the designer's grain hints for regions (pietroni2022 Sec. 4.3, "Grain
+     * alignment": a bias cut favours another axis in specific regions; docs/param.md, "Grain hints"). Each
+     * face's desired warp is the grain projected on it, turned by its panel's angle about the face normal (so
+     * a 45-degree bias stays 45 degrees to the grain all round a curved piece). */
+    const double *panel_grain_turn;
 } pz_textile_options;
 
 /** Outcomes that are not errors. */
@@ -244,6 +250,16 @@ pz_status pz_textile_solve(pz_textile_solver *solver, double *uv, pz_textile_res
 
 /** Frees the solver and sets *solver to NULL (accepts NULL and *solver == NULL). */
 void pz_textile_solver_free(pz_textile_solver **solver);
+
+/**
+ * Turns each panel p of a flattening (uv: pattern->mesh->vertex_count x 2) with panel_turn[p] != 0 about its
+ * centroid so that its desired warp (the 3D `grain` projected on each face and turned by panel_turn[p] about
+ * the face normal, area-weighted) runs along +v. For the back-ends without a grain term of their own (LSCM,
+ * WireWarping, spring-mass) when panels carry grain hints (pz_textile_options.panel_grain_turn is the
+ * textile's). panel_turn NULL: nothing to do. PZ_ERR_NOMEM.
+ */
+pz_status pz_param_turn_to_panel_grain(const pz_pattern *pattern, const double grain[3], const double *panel_turn,
+                                       double *uv, pz_ctx *ctx);
 
 /** LSCM only, panel by panel (the `--backend lscm` path), grain-oriented. */
 pz_status pz_param_lscm_pattern(const pz_pattern *pattern, const double grain[3], double *uv, pz_ctx *ctx);

@@ -292,9 +292,18 @@ static void compute_frames(textile_state *state)
             double area = pz_param_face_frame(pos, mesh->faces + 3 * f, state->frames + ((size_t)f * poses + p) * 3,
                                               e1, e2);
             if (p == 0) {
+                double a = dot3(state->grain, e1), b = dot3(state->grain, e2);
+                /* A grain hint turns the panel's warp about the face normal ((e1, e2, n) right-handed). */
+                double turn = state->panel_grain_turn ? state->panel_grain_turn[state->pattern->face_panel[f]] : 0;
+                if (turn != 0 && isfinite(turn)) {
+                    double c = cos(turn), s = sin(turn);
+                    double turned = c * a - s * b;
+                    b = s * a + c * b;
+                    a = turned;
+                }
                 state->areas[f] = area;
-                state->grain_local[2 * f] = dot3(state->grain, e1);
-                state->grain_local[2 * f + 1] = dot3(state->grain, e2);
+                state->grain_local[2 * f] = a;
+                state->grain_local[2 * f + 1] = b;
             }
         }
     }
@@ -710,6 +719,7 @@ static void read_options(pz_textile_solver *solver, const pz_textile_options *op
     }
     double up[3] = {0, 0, 1};
     memcpy(state->grain, options->grain_given ? options->grain : up, sizeof state->grain);
+    state->panel_grain_turn = options->panel_grain_turn;
     /* An explicit count is a ceiling: a second thread that finds no free
      * core, or too little work between barriers, makes the iteration slower
      * (docs/param.md, "Threads"); the result is the same for any count. */

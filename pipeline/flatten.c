@@ -183,8 +183,8 @@ static pz_status flatten_springmass(const pz_flatten_options *settings, const pz
 }
 
 static pz_status flatten_textile(const pz_flatten_options *settings, const pz_pattern *pattern,
-                                 const double grain[3], double strain_limit, double *uv, pz_textile_result *result,
-                                 pz_ctx *ctx)
+                                 const double grain[3], const double *panel_turn, double strain_limit, double *uv,
+                                 pz_textile_result *result, pz_ctx *ctx)
 {
     pz_textile_options options = {0};
     options.iterations = settings->iterations;
@@ -197,12 +197,13 @@ static pz_status flatten_textile(const pz_flatten_options *settings, const pz_pa
     memcpy(options.grain, grain, sizeof options.grain);
     options.use_poses = pattern->mesh->pose_count > 0;
     options.strain_limit = strain_limit;
+    options.panel_grain_turn = panel_turn;
     return pz_param_textile(pattern, &options, uv, result, ctx);
 }
 
 pz_status pl_flatten_pattern(const pz_run_options *options, const pz_pattern *pattern, double mm_per_unit,
-                             const double grain[3], double strain_limit, double *uv, pz_backend_outcome *outcome,
-                             pz_ctx *ctx)
+                             const double grain[3], const double *panel_turn, double strain_limit, double *uv,
+                             pz_backend_outcome *outcome, pz_ctx *ctx)
 {
     const pz_flatten_options *settings = &options->flatten;
     double start = pz_seconds();
@@ -216,20 +217,25 @@ pz_status pl_flatten_pattern(const pz_run_options *options, const pz_pattern *pa
         break;
     case PZ_BACKEND_SPRINGMASS: status = flatten_springmass(settings, pattern, grain, uv, outcome, ctx); break;
     default:
-        status = flatten_textile(settings, pattern, grain, strain_limit, uv, &outcome->textile, ctx);
+        status = flatten_textile(settings, pattern, grain, panel_turn, strain_limit, uv, &outcome->textile, ctx);
         break;
     }
+    /* The other back-ends have no grain term of their own: pieces with a grain hint are turned to it. */
+    if (status == PZ_OK && settings->backend != PZ_BACKEND_TEXTILE)
+        status = pz_param_turn_to_panel_grain(pattern, grain, panel_turn, uv, ctx);
     outcome->ms = pz_elapsed_ms(start, pz_seconds());
     return status;
 }
 
 pz_status pl_flatten_for_verdict(const pz_run_options *options, const pz_pattern *pattern, const double grain[3],
-                                 double strain_limit, double *uv, pz_ctx *ctx)
+                                 const double *panel_turn, double strain_limit, double *uv, pz_ctx *ctx)
 {
-    if (options->flatten.backend == PZ_BACKEND_LSCM)
-        return pz_param_lscm_pattern(pattern, grain, uv, ctx);
+    if (options->flatten.backend == PZ_BACKEND_LSCM) {
+        pz_status status = pz_param_lscm_pattern(pattern, grain, uv, ctx);
+        return status == PZ_OK ? pz_param_turn_to_panel_grain(pattern, grain, panel_turn, uv, ctx) : status;
+    }
     pz_textile_result result;
-    return flatten_textile(&options->flatten, pattern, grain, strain_limit, uv, &result, ctx);
+    return flatten_textile(&options->flatten, pattern, grain, panel_turn, strain_limit, uv, &result, ctx);
 }
 
 pz_status pl_measure(const pz_pattern *pattern, const double *uv, const pz_fabric *fabric, pz_metrics **metrics,

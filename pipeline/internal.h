@@ -182,6 +182,10 @@ void pl_segmenter_report(pl_segmenter *segmenter, pz_result *result);
 void pl_segmenter_give_plane(pl_segmenter *segmenter, const pz_symmetry *symmetry);
 /** The strain outlook (can S be met?) of `from`, taken already: not measured nor said again. */
 void pl_segmenter_take_outlook(pl_segmenter *segmenter, const pl_segmenter *from);
+/** The grain hints (millimetres; borrowed, must outlive the segmenter): the field aligns to them too. */
+void pl_segmenter_give_grain_hints(pl_segmenter *segmenter, const pz_sketch *hints);
+/** The layout last chosen (the segmenter's), or NULL. */
+const pz_segment_result *pl_segmenter_layout(const pl_segmenter *segmenter);
 /** 1 when the layout last chosen was made with the plane (mirrored). */
 int pl_segmenter_plane_used(const pl_segmenter *segmenter);
 /* 1 when the run's S was out of reach and a looser setting's layout is written (issue 15). */
@@ -191,19 +195,49 @@ int pl_segmenter_wrote_looser(const pl_segmenter *segmenter);
 
 /**
  * Flattens every panel of `pattern` with the back-end of options->flatten
- * (grain: result->grain), strain goal strain_limit (0: none), writing uv
- * (2 per pattern vertex, zeroed by the caller) and result->backend.
+ * (grain: result->grain; panel_turn: each panel's grain turn from the
+ * hints, pattern->panel_count radians, or NULL), strain goal
+ * strain_limit (0: none), writing uv (2 per pattern vertex, zeroed by the
+ * caller) and result->backend.
  */
 pz_status pl_flatten_pattern(const pz_run_options *options, const pz_pattern *pattern, double mm_per_unit,
-                             const double grain[3], double strain_limit, double *uv, pz_backend_outcome *outcome,
-                             pz_ctx *ctx);
+                             const double grain[3], const double *panel_turn, double strain_limit, double *uv,
+                             pz_backend_outcome *outcome, pz_ctx *ctx);
+
+/* ---------------------------------------------------------------- grain hints (sketches.c, grain_hints.c) */
+
+/* The most grain hints a run takes: a piece is turned by one; each is placed by a search over the faces. */
+#define PL_GRAIN_HINTS_MAX 200
+
+/**
+ * The grain hints of the options (options->grain_hints, millimetres, and the
+ * curves of options->grain_hints_path in the mesh's units), each within
+ * pz_sketch_tolerance of `mesh`, into *out (NULL when there are none; the
+ * caller's, pz_sketch_free). PZ_ERR_OPEN, PZ_ERR_DATA naming the file and the
+ * curve (or more than PL_GRAIN_HINTS_MAX hints), PZ_ERR_NOMEM.
+ */
+pz_status pl_gather_grain_hints(const pz_run_options *options, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx);
+/** The curves of a then b (either may be NULL) into *out (NULL when both are; the caller's). PZ_ERR_NOMEM. */
+pz_status pl_sketch_join(const pz_sketch *a, const pz_sketch *b, pz_sketch **out, pz_ctx *ctx);
+/**
+ * Each panel's grain turn from the grain hints (docs/run.md, "Grain hints"):
+ * a hint is given to the panel of the face nearest its middle point, and its
+ * turn is the angle, on that face and about its normal, from the projected
+ * global `grain` to the hint's chord (first point to last); several in one
+ * panel are averaged (strokes either way along a line agree); a mirror pair's
+ * partner without a hint takes the mirrored turn (segment: the layout, or
+ * NULL). *panel_turn: pattern->panel_count radians (0: no hint; the caller's,
+ * free), NULL when `hints` is NULL. *hinted: the panels turned. PZ_ERR_NOMEM.
+ */
+pz_status pl_panel_grain(const pz_pattern *pattern, const double grain[3], const pz_sketch *hints,
+                         const pz_segment_result *segment, double **panel_turn, int32_t *hinted, pz_ctx *ctx);
 
 /**
  * The flattening the segmentation's verdict judges a looser goal setting
  * with: the run's own back-end when it is textile or lscm, textile otherwise.
  */
 pz_status pl_flatten_for_verdict(const pz_run_options *options, const pz_pattern *pattern, const double grain[3],
-                                 double strain_limit, double *uv, pz_ctx *ctx);
+                                 const double *panel_turn, double strain_limit, double *uv, pz_ctx *ctx);
 
 /** One warning line per thing a user should know about a best-effort WireWarping. */
 void pl_warn_wirewarp(const pz_run_options *options, const pz_backend_outcome *outcome, pz_ctx *ctx);

@@ -75,6 +75,7 @@ void pz_result_free(pz_result **result)
     free(r->panel_names);
     pz_pattern_free(&r->pattern);
     free(r->uv);
+    free(r->panel_grain_turn);
     free(r->panel_mirror);
     free(r->panel_mirror_residual_mm);
     pl_backend_outcome_clear(&r->backend);
@@ -193,6 +194,7 @@ typedef struct pipeline_run {
     pl_panel_choice choice;
     pz_correspondences correspondences;
     pl_symmetric symmetric;          /* the garment made exactly symmetric (mirror_garment.c) */
+    pz_sketch *grain_hints;          /* the designer's grain hints in millimetres (grain_hints.c), or NULL */
 } pipeline_run;
 
 static void pipeline_run_clear(pipeline_run *run)
@@ -202,6 +204,7 @@ static void pipeline_run_clear(pipeline_run *run)
     pl_panel_choice_clear(&run->choice);
     pz_correspondences_clear(&run->correspondences);
     pl_symmetric_clear(&run->symmetric);
+    pz_sketch_free(&run->grain_hints);
 }
 
 /* The panels for this round: the segmentation's (its vertices may move: seam truing, and garment.obj's
@@ -274,11 +277,18 @@ static pz_status flatten_rounds(pipeline_run *run, pz_result *result, pz_ctx *ct
         if (status == PZ_OK && !(result->uv = calloc(2 * (size_t)result->pattern->mesh->vertex_count + 2,
                                                      sizeof(double))))
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", pl_who(result));
+        free(result->panel_grain_turn);
+        result->panel_grain_turn = NULL;
+        if (status == PZ_OK)
+            status = pl_panel_grain(result->pattern, result->grain, run->grain_hints,
+                                    run->segmenter ? pl_segmenter_layout(run->segmenter) : NULL,
+                                    &result->panel_grain_turn, &result->grain_hinted_panels, ctx);
         if (status == PZ_OK) {
             char message[64];
             snprintf(message, sizeof message, "%d panels", (int)result->pattern->panel_count);
             pl_stage(ctx, "flatten", 0.7, 0.9, message);
             status = pl_flatten_pattern(options, result->pattern, run->garment.mesh->unit_scale, result->grain,
+                                        result->panel_grain_turn,
                                         run->segmenter ? pl_segmenter_flatten_strain(run->segmenter, strain_limit)
                                                        : strain_limit,
                                         result->uv, &result->backend, ctx);
@@ -344,6 +354,8 @@ static pz_status redo_as_loaded(pipeline_run *run, pz_result *result, pz_ctx *ct
     pz_status status = pl_segmenter_create(&result->options, result->prepared, result->grain, &run->segmenter, ctx);
     if (status == PZ_OK) /* said once, before the long work: the symmetric garment's outlook stands */
         pl_segmenter_take_outlook(run->segmenter, first);
+    if (status == PZ_OK)
+        pl_segmenter_give_grain_hints(run->segmenter, run->grain_hints);
     pl_segmenter_free(&first);
     return status == PZ_OK ? flatten_rounds(run, result, ctx) : status;
 }
@@ -373,8 +385,13 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
     pz_status status = pl_load(mesh, &result->options, segment && result->options.prepare, result, &run.garment, ctx);
     if (status == PZ_OK && segment)
         status = pl_symmetrize_garment(&result->options, result, &run.garment, &run.symmetric, ctx);
+    if (status == PZ_OK)
+        status = pl_gather_grain_hints(&result->options, run.garment.mesh, &run.grain_hints, ctx);
+    result->grain_hint_count = run.grain_hints ? run.grain_hints->curve_count : 0;
     if (status == PZ_OK && segment)
         status = pl_segmenter_create(&result->options, result->prepared, result->grain, &run.segmenter, ctx);
+    if (status == PZ_OK && segment)
+        pl_segmenter_give_grain_hints(run.segmenter, run.grain_hints);
     if (status == PZ_OK && run.symmetric.active)
         pl_segmenter_give_plane(run.segmenter, &run.symmetric.symmetry);
     if (status == PZ_OK)

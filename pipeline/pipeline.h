@@ -129,6 +129,9 @@ typedef struct pz_run_options {
                                         sketch file: pz_run scales its offset with the mesh */
     const char *sketch_path;         /* seams the user drew: {"curves": [[[x,y,z], ...]]} in the mesh's units */
     const pz_sketch *sketch;         /* or the same in memory (millimetres); both may be given */
+    const char *grain_hints_path;    /* grain hints: {"curves": [[[x,y,z], ...]]} in the mesh's units, each a short
+                                        stroke along which the warp runs in the piece it lies on (docs/run.md) */
+    const pz_sketch *grain_hints;    /* or the same in memory (millimetres); both may be given */
     int truing;                      /* 1 (default): seams traced along mesh edges are smoothed on the surface */
     /* param */
     pz_flatten_options flatten;
@@ -270,6 +273,10 @@ typedef struct pz_result {
     double pose_edge_change_median;  /* extra poses: the relative change of the edge lengths against the rest */
     double pose_edge_change_p95;     /* pose, median and 95th percentile over every edge and pose (0 without) */
     const char *grain_source;        /* "given", "vertical axis (y)", "vertical axis (z)" (static) */
+    int32_t grain_hint_count;        /* the grain hints given (docs/run.md, "Grain hints") */
+    double *panel_grain_turn;        /* pattern->panel_count radians: a panel's warp turned from `grain` about the
+                                        surface normal by its hints (0: none); NULL without hints. The result's */
+    int32_t grain_hinted_panels;     /* panels with an axis of their own */
     /* the panels and the pattern */
     const char *panels_source;       /* "segmentation", "file", "uv", "files", "groups", "components" (static) */
     pz_pattern *pattern;             /* the cut garment: panels, seams, darts (param/param.h) */

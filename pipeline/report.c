@@ -8,6 +8,7 @@
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
 #include "pipeline/internal.h"
+#include "core/vec.h"
 
 #include <float.h>
 #include <math.h>
@@ -27,6 +28,7 @@ typedef struct report_view {
     double weights[4];
     pz_fabric fabric;
     double grain[3];
+    int32_t grain_hint_count;
     const char *grain_source;
     const pz_textile_result *textile;      /* textile only, else NULL */
     const pz_wirewarp_result *wirewarp;    /* wirewarp only, else NULL */
@@ -165,6 +167,7 @@ static void add_parameters(json_builder *builder, cJSON *root, const report_view
         add_number(builder, fabric, "k_r_N_per_mm_rad", report->fabric.k_r, 6);
     }
     add_doubles(builder, parameters, "grain", report->grain, 3, 6);
+    add_number(builder, parameters, "grain_hints", report->grain_hint_count, 0);
     if (report->grain_source && !cJSON_AddStringToObject(parameters, "grain_source", report->grain_source))
         builder->failed = 1;
     if (report->wirewarp && !cJSON_AddStringToObject(parameters, "scheme", report->progressive ? "progressive" : "global"))
@@ -533,6 +536,9 @@ static int extend_panels(const pz_result *result, cJSON *root)
         ok &= cJSON_AddBoolToObject(item, "shape_forced_by_input", goals->width_forced || goals->area_forced) != NULL;
         ok &= add_plain_number(item, "mirror_residual_mm",
                                result->panel_mirror_residual_mm ? pz_round(result->panel_mirror_residual_mm[p], 6) : -1);
+        /* A grain hint's turn of the piece's warp from the global grain (docs/run.md, "Grain hints"). */
+        if (result->panel_grain_turn)
+            ok &= add_plain_number(item, "grain_turn_deg", pz_round(result->panel_grain_turn[p] * 180 / PZ_PI, 3));
         char text[256];
         pz_goal_describe(goals, &result->options.goals, text, sizeof text);
         ok &= cJSON_AddBoolToObject(item, "goals_met", goals->failures == 0) != NULL;
@@ -779,6 +785,7 @@ static void fill_view(const pz_result *result, report_view *view)
     memcpy(view->weights, flatten->weights, sizeof view->weights);
     view->fabric = flatten->fabric;
     memcpy(view->grain, result->grain, sizeof view->grain);
+    view->grain_hint_count = result->grain_hint_count;
     view->grain_source = result->grain_source;
     view->textile = flatten->backend == PZ_BACKEND_TEXTILE ? &result->backend.textile : NULL;
     view->wirewarp = flatten->backend == PZ_BACKEND_WIREWARP ? &result->backend.wirewarp : NULL;

@@ -92,6 +92,7 @@ struct pl_segmenter {
     /* The mirror plane (docs/segment.md, "Symmetry"): detected (or the user's) once, before the field. */
     pz_symmetry symmetry;
     const pz_symmetry *given_plane;     /* the symmetric garment's plane and exact maps (pl_segmenter_give_plane) */
+    const pz_sketch *grain_hints;       /* the designer's grain hints (pl_segmenter_give_grain_hints), or NULL */
     pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
     int plane;                          /* 1: a plane was found or given (each goal setting decides its use) */
     int32_t mirror_pieces, exact_mirror_pieces; /* of the last flattening (pl_segmenter_exact_mirrors) */
@@ -565,10 +566,15 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
     /* The field depends on the original surface only: a verdict round reuses it. */
     if (status == PZ_OK && !seg->field) {
         pz_field_options options = seg->options->field;
-        options.sketch = sketch;
+        /* The grain hints steer the field as the seams do (one arm along each), without becoming seams. */
+        pz_sketch *aligned = NULL;
+        status = pl_sketch_join(sketch, seg->grain_hints, &aligned, ctx);
+        options.sketch = aligned;
         options.use_poses = 1;
         pl_stage(ctx, "field", 0.1, 0.2, "cross-field");
-        status = pz_field_compute(garment, topology, &options, &seg->field, ctx);
+        if (status == PZ_OK)
+            status = pz_field_compute(garment, topology, &options, &seg->field, ctx);
+        pz_sketch_free(&aligned);
         if (status == PZ_OK)
             status = find_plane(seg, garment, topology, ctx);
         seg->field_ms = pz_elapsed_ms(start, pz_seconds());
@@ -685,10 +691,17 @@ static double ladder_strain_above(double strain, double default_strain)
 
 /* The flattening the run would make of the pattern (its back-end for textile and lscm; wirewarp and
  * springmass rungs are judged on textile). */
-static pz_status ladder_flatten(const pl_segmenter *seg, const pz_pattern *pattern, double max_strain, double *uv,
-                                pz_ctx *ctx)
+static pz_status ladder_flatten(const pl_segmenter *seg, const pz_pattern *pattern, const pz_segment_result *segment,
+                                double max_strain, double *uv, pz_ctx *ctx)
 {
-    return pl_flatten_for_verdict(seg->options, pattern, seg->result_grain, max_strain, uv, ctx);
+    /* The pieces turned by the grain hints, as the run flattens them (pipeline.c, flatten_rounds). */
+    double *turn = NULL;
+    int32_t hinted = 0;
+    pz_status status = pl_panel_grain(pattern, seg->result_grain, seg->grain_hints, segment, &turn, &hinted, ctx);
+    if (status == PZ_OK)
+        status = pl_flatten_for_verdict(seg->options, pattern, seg->result_grain, turn, max_strain, uv, ctx);
+    free(turn);
+    return status;
 }
 
 /* One verdict round of a rung, as pz_flatten_execute makes it for the run: pattern, joint flattening,
@@ -710,7 +723,7 @@ static pz_status ladder_round(const pl_segmenter *seg, pz_mesh *garment, const p
     if (status == PZ_OK && !(uv = calloc(2 * (size_t)pattern->mesh->vertex_count + 2, sizeof(double))))
         status = PZ_ERR_NOMEM;
     if (status == PZ_OK)
-        status = ladder_flatten(seg, pattern, goals->goals.max_strain, uv, &quiet);
+        status = ladder_flatten(seg, pattern, segment, goals->goals.max_strain, uv, &quiet);
     int32_t exact = 0, pieces = 0; /* the pieces as the run's own flattening gives them (flatten_rounds) */
     if (status == PZ_OK && seg->plane && goals->symmetry_used && may_make_exact(seg))
         status = pl_exact_mirror_pieces(pattern, segment, goals->goals.max_strain, uv, &exact, &pieces, &quiet);
@@ -1121,6 +1134,16 @@ void pl_segmenter_take_outlook(pl_segmenter *seg, const pl_segmenter *from)
 {
     if (from)
         seg->outlook = from->outlook;
+}
+
+void pl_segmenter_give_grain_hints(pl_segmenter *seg, const pz_sketch *hints)
+{
+    seg->grain_hints = hints;
+}
+
+const pz_segment_result *pl_segmenter_layout(const pl_segmenter *seg)
+{
+    return seg ? seg->segment : NULL;
 }
 
 int pl_segmenter_wrote_looser(const pl_segmenter *seg)

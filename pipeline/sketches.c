@@ -96,3 +96,42 @@ pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_resul
     *out = sketch;
     return PZ_OK;
 }
+
+pz_status pl_sketch_join(const pz_sketch *a, const pz_sketch *b, pz_sketch **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    if ((!a || a->curve_count == 0) && (!b || b->curve_count == 0))
+        return PZ_OK;
+    pz_sketch *joined = calloc(1, sizeof *joined);
+    if (!joined || !sketch_reserve(joined, 0, 0) || !sketch_append(joined, a) || !sketch_append(joined, b)) {
+        pz_sketch_free(&joined);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory joining the sketches");
+    }
+    *out = joined;
+    return PZ_OK;
+}
+
+pz_status pl_gather_grain_hints(const pz_run_options *options, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    pz_sketch *from_file = NULL;
+    pz_status status = pz_sketch_check(options->grain_hints, mesh, "grain hints", ctx);
+    if (status == PZ_OK && options->grain_hints_path) {
+        status = pz_sketch_read(options->grain_hints_path, mesh->unit_scale, &from_file, ctx);
+        if (status == PZ_OK)
+            status = pz_sketch_check(from_file, mesh, options->grain_hints_path, ctx);
+    }
+    if (status == PZ_OK)
+        status = pl_sketch_join(options->grain_hints, from_file, out, ctx);
+    pz_sketch_free(&from_file);
+    /* Each hint is placed by a search over the faces (grain_hints.c), at every flattening: a bound keeps a
+     * hostile file's cost in step with the garment's. */
+    if (status == PZ_OK && *out && (*out)->curve_count > PL_GRAIN_HINTS_MAX) {
+        int32_t count = (*out)->curve_count;
+        pz_sketch_free(out);
+        status = pz_error(ctx, PZ_ERR_DATA, "%s: %d grain hints, at most %d (a piece takes one)",
+                          options->grain_hints_path ? options->grain_hints_path : "grain hints", (int)count,
+                          PL_GRAIN_HINTS_MAX);
+    }
+    return status;
+}

@@ -82,6 +82,7 @@ static void job_free(studio_job *job)
     if (!job)
         return;
     pz_sketch_free(&job->sketch);
+    pz_sketch_free(&job->grain);
     free(job);
 }
 
@@ -99,6 +100,7 @@ static studio_output *make_output(pz_studio *studio, pz_result *result, int run_
     snprintf(output->name, sizeof output->name, "%s", result->options.name ? result->options.name : "garment");
     result->options.name = output->name;
     result->options.sketch = NULL; /* the job's, freed by the next run */
+    result->options.grain_hints = NULL;
     output->json = studio_result_json(result, run_id, ms, &output->json_length);
     if (!output->json) {
         free(output);
@@ -158,7 +160,7 @@ static void *job_main(void *argument)
     return NULL;
 }
 
-pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *options, pz_sketch *sketch,
+pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *options, pz_sketch *sketch, pz_sketch *grain,
                            int *run_id, pz_ctx *ctx)
 {
     studio_job *job = calloc(1, sizeof *job);
@@ -166,6 +168,7 @@ pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *opti
     if (!job || !start) {
         free(job), free(start);
         pz_sketch_free(&sketch);
+        pz_sketch_free(&grain);
         return pz_error(ctx, PZ_ERR_NOMEM, "out of memory starting a run");
     }
     job->options = *options;
@@ -173,6 +176,8 @@ pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *opti
     job->options.name = NULL; /* the garment's name, set below (it lives as long as the job) */
     job->sketch = sketch;
     job->options.sketch = sketch;
+    job->grain = grain;
+    job->options.grain_hints = grain;
     pthread_mutex_lock(&studio->lock);
     studio_garment *garment = studio_garment_find(studio, id);
     if (!garment) {

@@ -58,6 +58,7 @@ typedef struct studio_job {
     int run_id;
     pz_run_options options;
     pz_sketch *sketch;              /* the strokes (mm), or NULL; owned */
+    pz_sketch *grain;               /* the grain strokes (mm), or NULL; owned */
     volatile int cancel;
     pthread_t thread;
     struct studio_job *previous;    /* the run this one replaces: joined and freed before this one starts */
@@ -108,7 +109,7 @@ pz_status studio_garment_load(pz_studio *studio, const char *path, const char *n
 studio_garment *studio_garment_find(pz_studio *studio, int id);
 /* Starts a run of garment `id` with `options` and `sketch` (taken: freed here on failure too), cancelling the
  * running one. *run_id receives its number. PZ_ERR_USAGE when there is no such garment. */
-pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *options, pz_sketch *sketch,
+pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *options, pz_sketch *sketch, pz_sketch *grain,
                            int *run_id, pz_ctx *ctx);
 /* Asks the running run of garment `id` to stop; 0 when there is no such garment. */
 int studio_run_cancel(pz_studio *studio, int id);
@@ -131,7 +132,7 @@ char *studio_garments_list_json(pz_studio *studio);
  * any): unknown keys, wrong types, values out of range, too many or too long strokes, points not finite or
  * far from the garment (bbox of `mesh` grown by its diagonal) are PZ_ERR_USAGE with a message. */
 pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh, const pz_sketch *welded,
-                           pz_run_options *options, pz_sketch **sketch, pz_ctx *ctx);
+                           pz_run_options *options, pz_sketch **sketch, pz_sketch **grain, pz_ctx *ctx);
 /* A sketch with room for `curves` curves and `points` points (curve_count set, offsets zeroed), or
  * PZ_ERR_NOMEM; freed with pz_sketch_free. */
 pz_status studio_sketch_new(int32_t curves, int32_t points, pz_sketch **out, pz_ctx *ctx);

@@ -117,30 +117,31 @@ pz_status studio_sketch_new(int32_t curves, int32_t points, pz_sketch **out, pz_
 }
 
 /* One point [x, y, z] inside the box lo..hi into p. */
-static pz_status read_point(const cJSON *item, int stroke, int index, const double lo[3], const double hi[3],
-                            double *p, pz_ctx *ctx)
+static pz_status read_point(const cJSON *item, const char *name, int stroke, int index, const double lo[3],
+                            const double hi[3], double *p, pz_ctx *ctx)
 {
     if (!cJSON_IsArray(item) || cJSON_GetArraySize(item) != 3)
-        return pz_error(ctx, PZ_ERR_USAGE, "strokes[%d][%d]: expected [x, y, z]", stroke, index);
+        return pz_error(ctx, PZ_ERR_USAGE, "%s[%d][%d]: expected [x, y, z]", name, stroke, index);
     for (int k = 0; k < 3; ++k) {
         const cJSON *value = cJSON_GetArrayItem(item, k);
         if (!cJSON_IsNumber(value) || !isfinite(value->valuedouble))
-            return pz_error(ctx, PZ_ERR_USAGE, "strokes[%d][%d]: coordinates must be finite numbers", stroke, index);
+            return pz_error(ctx, PZ_ERR_USAGE, "%s[%d][%d]: coordinates must be finite numbers", name, stroke, index);
         p[k] = value->valuedouble;
         if (p[k] < lo[k] || p[k] > hi[k])
-            return pz_error(ctx, PZ_ERR_USAGE, "strokes[%d][%d]: the point is far from the garment", stroke, index);
+            return pz_error(ctx, PZ_ERR_USAGE, "%s[%d][%d]: the point is far from the garment", name, stroke, index);
     }
     return PZ_OK;
 }
 
-/* "strokes": [[[x, y, z], ...], ...] in millimetres, within the limits of internal.h, into a new sketch. */
-static pz_status read_strokes(const cJSON *item, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx)
+/* "strokes" (seams) or "grain_strokes" (`name`): [[[x, y, z], ...], ...] in millimetres, within the limits of
+ * internal.h, into a new sketch. */
+static pz_status read_strokes(const cJSON *item, const char *name, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx)
 {
     if (!cJSON_IsArray(item))
-        return pz_error(ctx, PZ_ERR_USAGE, "strokes: expected an array of polylines");
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: expected an array of polylines", name);
     int count = cJSON_GetArraySize(item);
     if (count > STUDIO_MAX_STROKES)
-        return pz_error(ctx, PZ_ERR_USAGE, "strokes: %d strokes, at most %d", count, STUDIO_MAX_STROKES);
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: %d strokes, at most %d", name, count, STUDIO_MAX_STROKES);
     if (count == 0)
         return PZ_OK;
     size_t total = 0;
@@ -148,11 +149,11 @@ static pz_status read_strokes(const cJSON *item, const pz_mesh *mesh, pz_sketch 
         const cJSON *stroke = cJSON_GetArrayItem(item, s);
         int points = cJSON_IsArray(stroke) ? cJSON_GetArraySize(stroke) : -1;
         if (points < 2 || points > STUDIO_MAX_STROKE_POINTS)
-            return pz_error(ctx, PZ_ERR_USAGE, "strokes[%d]: expected 2 .. %d points", s, STUDIO_MAX_STROKE_POINTS);
+            return pz_error(ctx, PZ_ERR_USAGE, "%s[%d]: expected 2 .. %d points", name, s, STUDIO_MAX_STROKE_POINTS);
         total += (size_t)points;
     }
     if (total > STUDIO_MAX_TOTAL_POINTS)
-        return pz_error(ctx, PZ_ERR_USAGE, "strokes: %zu points, at most %d", total, STUDIO_MAX_TOTAL_POINTS);
+        return pz_error(ctx, PZ_ERR_USAGE, "%s: %zu points, at most %d", name, total, STUDIO_MAX_TOTAL_POINTS);
     /* Points must lie near the garment: its box grown by its diagonal on every side. */
     double lo[3], hi[3];
     pz_mesh_bbox(mesh, lo, hi);
@@ -170,7 +171,7 @@ static pz_status read_strokes(const cJSON *item, const pz_mesh *mesh, pz_sketch 
         sketch->curve_offsets[s] = (int32_t)at;
         int index = 0;
         for (const cJSON *point = stroke->child; point && status == PZ_OK; point = point->next, ++index)
-            status = read_point(point, s, index, lo, hi, sketch->points + 3 * at++, ctx);
+            status = read_point(point, name, s, index, lo, hi, sketch->points + 3 * at++, ctx);
     }
     sketch->curve_offsets[count] = (int32_t)at;
     if (status != PZ_OK)
@@ -204,9 +205,9 @@ static pz_status append_welded(pz_sketch **sketch, const pz_sketch *welded, pz_c
     return PZ_OK;
 }
 
-/* One member of the run request into options or sketch. */
+/* One member of the run request into options, sketch (seam strokes) or grain (grain strokes). */
 static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_options *options, pz_sketch **sketch,
-                             pz_ctx *ctx)
+                             pz_sketch **grain, pz_ctx *ctx)
 {
     const char *key = item->string;
     double number = 0;
@@ -230,17 +231,20 @@ static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_opti
     else if (strcmp(key, "fabric") == 0)
         status = read_fabric(item, &options->flatten, ctx);
     else if (strcmp(key, "strokes") == 0)
-        status = read_strokes(item, mesh, sketch, ctx);
+        status = read_strokes(item, "strokes", mesh, sketch, ctx);
+    else if (strcmp(key, "grain_strokes") == 0)
+        status = read_strokes(item, "grain_strokes", mesh, grain, ctx);
     else
         status = pz_error(ctx, PZ_ERR_USAGE, "%s: not an option (max_strain, max_corners, max_pieces, darts, "
-                          "symmetry, fabric, strokes)", key);
+                          "symmetry, fabric, strokes, grain_strokes)", key);
     return status;
 }
 
 pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh, const pz_sketch *welded,
-                           pz_run_options *options, pz_sketch **sketch, pz_ctx *ctx)
+                           pz_run_options *options, pz_sketch **sketch, pz_sketch **grain, pz_ctx *ctx)
 {
     *sketch = NULL;
+    *grain = NULL;
     pz_run_options_default(options);
     options->units = PZ_UNITS_MM; /* the studio's garments are in millimetres once loaded */
     options->prepare = 0;         /* and prepared once (garments.c) */
@@ -252,16 +256,19 @@ pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh,
         else if (strcmp(item->string, "strokes") == 0 && *sketch)
             status = pz_error(ctx, PZ_ERR_USAGE, "strokes: given twice");
         else
-            status = read_member(item, mesh, options, sketch, ctx);
+            status = read_member(item, mesh, options, sketch, grain, ctx);
     }
     cJSON_Delete(root);
     if (status == PZ_OK)
         status = append_welded(sketch, welded, ctx);
     if (status == PZ_OK)
         status = pz_run_options_check(options, "run", PZ_OPTION_KEYWORD, ctx);
-    if (status != PZ_OK)
+    if (status != PZ_OK) {
         pz_sketch_free(sketch);
+        pz_sketch_free(grain);
+    }
     options->sketch = *sketch;
+    options->grain_hints = *grain;
     return status;
 }
 

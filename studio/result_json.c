@@ -194,6 +194,9 @@ static cJSON *pieces_json(const pz_result *result)
             cJSON_AddBoolToObject(item, "goals_met", goal->failures == 0);
             cJSON_AddStringToObject(item, "problems", problems);
         }
+        if (result->panel_grain_turn && piece->panel >= 0 && piece->panel < result->pattern->panel_count)
+            cJSON_AddNumberToObject(item, "grain_turn_deg",
+                                    studio_round(result->panel_grain_turn[piece->panel] * 57.29577951308232, 1));
     }
     return pieces;
 }

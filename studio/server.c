@@ -243,17 +243,17 @@ static enum MHD_Result start_run(pz_studio *studio, struct MHD_Connection *conne
     pz_ctx_init(&ctx);
     ctx.quiet = 1;
     pz_run_options options;
-    pz_sketch *sketch = NULL;
+    pz_sketch *sketch = NULL, *grain = NULL;
     /* The garment's mesh stays until its runs are done; the request reads its box under the lock. */
     pthread_mutex_lock(&studio->lock);
     studio_garment *garment = studio_garment_find(studio, id);
     pz_status status = garment ? studio_parse_run(body->body, body->length, garment->mesh, garment->welded, &options,
-                                                  &sketch, &ctx)
+                                                  &sketch, &grain, &ctx)
                                : pz_error(&ctx, PZ_ERR_OPEN, "garment %d: not loaded", id);
     pthread_mutex_unlock(&studio->lock);
     int run_id = 0;
     if (status == PZ_OK)
-        status = studio_run_start(studio, id, &options, sketch, &run_id, &ctx);
+        status = studio_run_start(studio, id, &options, sketch, grain, &run_id, &ctx);
     if (status != PZ_OK)
         return answer_status(connection, status, &ctx);
     char *text = NULL;

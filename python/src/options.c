@@ -399,6 +399,10 @@ int pzpy_run_options(PyObject *kwargs, int run_only, pz_run_options *options, pz
         return -1;
     if (flatten_options(kwargs, &options->flatten, keep) < 0 || export_options(kwargs, options, keep) < 0)
         return -1;
+    /* --grain-hints FILE: the warp along each stroke in its piece (run and flatten). */
+    if (!(value = pzpy_pop(kwargs, "grain_hints", keep)) ||
+        pzpy_path(value, "grain_hints", keep, &options->grain_hints_path) < 0)
+        return -1;
     if (run_only && run_only_options(kwargs, options, keep) < 0)
         return -1;
     pz_ctx ctx;

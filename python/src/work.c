@@ -22,6 +22,16 @@
 
 #define POLL_MS 20
 
+/* One progress report, as the library gave it. */
+typedef struct progress_report {
+    char stage[32];
+    char message[128];
+    double fraction;
+} progress_report;
+
+/* Stage changes kept between two polls: a run has about ten stages in all. */
+#define PENDING_REPORTS 16
+
 /* What the two threads share, under `lock`. */
 typedef struct shared_state {
     pthread_mutex_t lock;
@@ -30,22 +40,25 @@ typedef struct shared_state {
     pz_ctx *ctx;
     int done;
     pz_status status;
-    /* the last progress report, and a counter of reports (the waiter delivers each new one) */
-    char stage[32];
-    char message[128];
-    double fraction;
-    unsigned long reports;
+    /* the reports not delivered yet: the last of each stage, in order (a stage that starts and ends between
+     * two polls is still seen); a new report of the pending last stage replaces it */
+    progress_report pending[PENDING_REPORTS];
+    int pending_count;
 } shared_state;
 
-/* The library's progress callback, on the worker thread: keeps the last report. */
+/* The library's progress callback, on the worker thread: queues the report (see shared_state.pending). */
 static void keep_progress(void *user, const char *stage, double fraction, const char *message)
 {
     shared_state *state = user;
     pthread_mutex_lock(&state->lock);
-    snprintf(state->stage, sizeof state->stage, "%s", stage ? stage : "");
-    snprintf(state->message, sizeof state->message, "%s", message ? message : "");
-    state->fraction = fraction;
-    ++state->reports;
+    stage = stage ? stage : "";
+    int last = state->pending_count - 1;
+    if (last < 0 || strcmp(state->pending[last].stage, stage) != 0)
+        last = state->pending_count < PENDING_REPORTS ? state->pending_count++ : PENDING_REPORTS - 1;
+    progress_report *report = &state->pending[last];
+    snprintf(report->stage, sizeof report->stage, "%s", stage);
+    snprintf(report->message, sizeof report->message, "%s", message ? message : "");
+    report->fraction = fraction;
     pthread_mutex_unlock(&state->lock);
 }
 
@@ -80,25 +93,23 @@ static int wait_a_little(shared_state *state)
     return done;
 }
 
-/* Calls progress(stage, fraction, message) when there is a new report; -1 when it raised. */
-static int deliver_progress(shared_state *state, PyObject *progress, unsigned long *delivered)
+/* Calls progress(stage, fraction, message) for each report queued since the last call; -1 when it raised. */
+static int deliver_progress(shared_state *state, PyObject *progress)
 {
-    if (progress == Py_None)
-        return 0;
-    char stage[32], message[128];
-    double fraction;
+    progress_report reports[PENDING_REPORTS];
     pthread_mutex_lock(&state->lock);
-    unsigned long reports = state->reports;
-    memcpy(stage, state->stage, sizeof stage);
-    memcpy(message, state->message, sizeof message);
-    fraction = state->fraction;
+    int count = state->pending_count;
+    memcpy(reports, state->pending, (size_t)count * sizeof reports[0]);
+    state->pending_count = 0;
     pthread_mutex_unlock(&state->lock);
-    if (reports == *delivered)
-        return 0;
-    *delivered = reports;
-    PyObject *returned = PyObject_CallFunction(progress, "sds", stage, fraction, message);
-    Py_XDECREF(returned);
-    return returned ? 0 : -1;
+    for (int i = 0; i < count && progress != Py_None; ++i) {
+        PyObject *returned = PyObject_CallFunction(progress, "sds", reports[i].stage, reports[i].fraction,
+                                                   reports[i].message);
+        Py_XDECREF(returned);
+        if (!returned)
+            return -1;
+    }
+    return 0;
 }
 
 /* 1 when cancel.is_set() is true, 0 when not (or cancel is None), -1 when it raised. */
@@ -150,13 +161,12 @@ pz_status pzpy_run_job(pzpy_job *job, pz_ctx *ctx, PyObject *progress, PyObject 
         *python_error = 1;
         return PZ_ERR_INTERNAL;
     }
-    unsigned long delivered = 0;
     int done = 0;
     while (!done) {
         done = wait_a_little(&state);
         if (cancel_flag) /* already stopping: wait for the worker */
             continue;
-        int stop = deliver_progress(&state, progress, &delivered) < 0 || PyErr_CheckSignals() < 0;
+        int stop = deliver_progress(&state, progress) < 0 || PyErr_CheckSignals() < 0;
         int requested = stop ? 0 : cancel_requested(cancel);
         if (stop || requested < 0)
             *python_error = 1;
@@ -166,7 +176,7 @@ pz_status pzpy_run_job(pzpy_job *job, pz_ctx *ctx, PyObject *progress, PyObject 
     Py_BEGIN_ALLOW_THREADS
     pthread_join(thread, NULL);
     Py_END_ALLOW_THREADS
-    if (!*python_error && state.status == PZ_OK && deliver_progress(&state, progress, &delivered) < 0)
+    if (!*python_error && state.status == PZ_OK && deliver_progress(&state, progress) < 0)
         *python_error = 1;  /* the last report, delivered like the others */
     ctx->cancel = NULL;
     ctx->progress = NULL;

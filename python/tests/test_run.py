@@ -79,6 +79,24 @@ def test_options_reach_the_library(bodice):
     assert result.report["summary"]["dart_count"] == 0 and result.darts == []
 
 
+def test_grain_hints_turn_the_piece_they_lie_on(tmp_path):
+    """grain_hints= (a file, as --grain-hints): a 45-degree helix stroke on a cylinder turns one piece by 45."""
+    import json
+    import math
+
+    points = []
+    for t in (-30, -15, 0, 15, 30):
+        phi = math.pi / 2 + t * math.sin(math.pi / 4) / 150.0
+        points.append([150 * math.cos(phi), 150 * math.sin(phi), 200 + t * math.cos(math.pi / 4)])
+    hints = tmp_path / "hints.json"
+    hints.write_text(json.dumps({"curves": [points]}))
+    cylinder = panelize.generate("cylinder", faces=3000)
+    result = panelize.run(cylinder, grain_hints=str(hints))
+    turns = sorted(round(abs(panel["grain_turn_deg"])) for panel in result.report["panels"])
+    assert result.report["parameters"]["grain_hints"] == 1
+    assert turns[-1] == 45 and turns[0] == 0
+
+
 def test_flatten_the_panels_of_a_run(bodice_result):
     """The panels run found, given back to flatten as per-face ids, give the same panels."""
     first = bodice_result

@@ -1,5 +1,6 @@
 // panelize studio: the page (docs/studio.md). The 3D garment coloured by panel with its seams (three.js),
-// seam strokes drawn on its surface, the options, and the flattened pattern beside it with its strain.
+// seam strokes and grain strokes drawn on its surface, the options, and the flattened pattern beside it with its
+// strain.
 // Every edit starts a new run on the server, which cancels the running one.
 // SPDX-License-Identifier: GPL-3.0-or-later
 import * as THREE from 'three';
@@ -11,7 +12,8 @@ const SVG = 'http://www.w3.org/2000/svg';
 // What the page knows; the browser test reads it through window.studio.
 const state = {
   garment: null,        // the server's garment summary {id, name, faces, mean_edge_mm, ...}
-  strokes: [],          // seam strokes: arrays of [x, y, z] on the surface (mm)
+  strokes: [],          // seam strokes: {points: [[x, y, z], ...] on the surface (mm), normals}
+  grainStrokes: [],     // grain strokes: the warp runs along each in the piece it lies on (a bias cut)
   run: 0,               // the latest run asked for
   shownRun: 0,          // the run whose result is shown
   result: null,
@@ -175,15 +177,28 @@ function hitSurface(event) {
   return hits.length ? hits[0] : null;
 }
 
+// Seam strokes in orange; grain strokes in blue, with an arrowhead at their end (the warp's direction).
 function drawStrokes() {
   strokeGroup.clear();
   const lift = state.garment ? state.garment.mean_edge_mm * 0.15 : 0.5;
-  for (const stroke of state.strokes) {
-    const points = stroke.points.map((p, i) => new THREE.Vector3(...p).addScaledVector(stroke.normals[i], lift));
-    const geometry = new THREE.BufferGeometry().setFromPoints(points);
-    strokeGroup.add(new THREE.Line(geometry, new THREE.LineBasicMaterial({ color: 0xef8354, linewidth: 3 })));
-  }
+  const kinds = [[state.strokes, 0xef8354], [state.grainStrokes, 0x2f6fd6]];
+  for (const [strokes, color] of kinds)
+    for (const stroke of strokes) {
+      const points = stroke.points.map((p, i) => new THREE.Vector3(...p).addScaledVector(stroke.normals[i], lift));
+      const geometry = new THREE.BufferGeometry().setFromPoints(points);
+      strokeGroup.add(new THREE.Line(geometry, new THREE.LineBasicMaterial({ color, linewidth: 3 })));
+      if (strokes === state.grainStrokes && points.length >= 2) {
+        const tip = points[points.length - 1], back = points[Math.max(0, points.length - 3)];
+        const direction = tip.clone().sub(back).normalize();
+        const length = 2 * (state.garment ? state.garment.mean_edge_mm : 5);
+        strokeGroup.add(new THREE.ArrowHelper(direction, tip.clone().addScaledVector(direction, -length), length,
+          color, length * 0.8, length * 0.5));
+      }
+    }
 }
+
+// The strokes the current mode draws into.
+function strokesOfMode() { return state.mode === 'grain' ? state.grainStrokes : state.strokes; }
 
 let drawing = null;
 canvas.addEventListener('pointerdown', (event) => {
@@ -205,44 +220,48 @@ canvas.addEventListener('pointermove', (event) => {
   if (last.distanceTo(hit.point) < 0.5 * state.garment.mean_edge_mm) return;
   drawing.points.push(hit.point.toArray());
   drawing.normals.push(hit.face.normal.clone());
-  state.strokes.push(drawing);
+  const strokes = strokesOfMode();
+  strokes.push(drawing);
   drawStrokes();
-  state.strokes.pop();
+  strokes.pop();
 });
 canvas.addEventListener('pointerup', () => {
   if (!drawing) return;
   const stroke = drawing;
   drawing = null;
   if (stroke.points.length >= 2) {
-    state.strokes.push(stroke);
+    strokesOfMode().push(stroke);
     drawStrokes();
     startRun();
   }
 });
 
-// Erases the stroke nearest to `point` when within 3 mean edges of it.
+// Erases the stroke (seam or grain) nearest to `point` when within 3 mean edges of it.
 function eraseNear(point) {
-  let best = -1, bestDistance = 3 * state.garment.mean_edge_mm;
-  state.strokes.forEach((stroke, index) => {
-    for (const p of stroke.points) {
-      const d = point.distanceTo(new THREE.Vector3(...p));
-      if (d < bestDistance) { bestDistance = d; best = index; }
-    }
-  });
-  if (best < 0) return;
-  state.strokes.splice(best, 1);
+  let best = null, bestIndex = -1, bestDistance = 3 * state.garment.mean_edge_mm;
+  for (const strokes of [state.strokes, state.grainStrokes])
+    strokes.forEach((stroke, index) => {
+      for (const p of stroke.points) {
+        const d = point.distanceTo(new THREE.Vector3(...p));
+        if (d < bestDistance) { bestDistance = d; best = strokes; bestIndex = index; }
+      }
+    });
+  if (!best) return;
+  best.splice(bestIndex, 1);
   drawStrokes();
   startRun();
 }
 
 function setMode(mode) {
   state.mode = mode;
-  for (const name of ['orbit', 'draw', 'erase']) $(`mode-${name}`).classList.toggle('active', name === mode);
+  for (const name of ['orbit', 'draw', 'grain', 'erase']) $(`mode-${name}`).classList.toggle('active', name === mode);
   controls.enabled = mode === 'orbit';
-  $('view3d').classList.toggle('drawing', mode === 'draw');
+  $('view3d').classList.toggle('drawing', mode === 'draw' || mode === 'grain');
   $('view3d').classList.toggle('erasing', mode === 'erase');
   $('hint').textContent = { orbit: 'drag: orbit · wheel: zoom · right drag: pan',
-    draw: 'drag on the garment: a seam stroke', erase: 'click a stroke: erase it' }[mode];
+    draw: 'drag on the garment: a seam stroke',
+    grain: 'drag a short stroke on a piece: its warp runs along it (e.g. 45 degrees: a bias cut)',
+    erase: 'click a stroke: erase it' }[mode];
 }
 
 // ---------------------------------------------------------------- runs
@@ -255,6 +274,7 @@ function runOptions() {
     darts: $('darts').checked,
     symmetry: $('symmetry').value,
     strokes: state.strokes.map((stroke) => stroke.points),
+    grain_strokes: state.grainStrokes.map((stroke) => stroke.points),
   };
   if ($('fabric').value) options.fabric = $('fabric').value.split(',').map(Number);
   return options;
@@ -389,6 +409,7 @@ function showTooltip(event, piece) {
   tip.textContent = `${piece.name}${piece.mirrored ? ' (mirror image)' : ''}\n` +
     `${Math.round(piece.width_mm)} × ${Math.round(piece.height_mm)} mm, ${(piece.area_mm2 / 1e4).toFixed(1)} dm²\n` +
     `worst strain ${(100 * piece.strain).toFixed(2)}%, ${piece.corners} corners\n` +
+    (piece.grain_turn_deg ? `grain turned ${piece.grain_turn_deg.toFixed(1)}° (a grain stroke)\n` : '') +
     (piece.goals_met ? 'goals met' : piece.problems);
   tip.style.left = `${event.clientX - box.left + 14}px`;
   tip.style.top = `${event.clientY - box.top + 14}px`;
@@ -429,6 +450,7 @@ async function openGarment(garment) {
   const full = await api('GET', `/api/garments/${garment.id}`);
   state.garment = full;
   state.strokes = [];
+  state.grainStrokes = [];
   state.result = null;
   drawStrokes();
   $('garment-name').textContent = `${full.name}: ${full.faces} faces`;
@@ -460,7 +482,7 @@ $('run').addEventListener('click', startRun);
 $('cancel').addEventListener('click', () => api('POST', `/api/garments/${state.garment.id}/cancel`, {}));
 for (const id of ['max-strain', 'max-corners', 'max-pieces', 'darts', 'symmetry', 'fabric'])
   $(id).addEventListener('change', startRun);
-for (const mode of ['orbit', 'draw', 'erase']) $(`mode-${mode}`).addEventListener('click', () => setMode(mode));
+for (const mode of ['orbit', 'draw', 'grain', 'erase']) $(`mode-${mode}`).addEventListener('click', () => setMode(mode));
 
 async function start() {
   resize();

@@ -7,7 +7,8 @@
 // front through the page's own mouse events in "Draw seam" mode, and checks that the new layout has a
 // seam within 2 mean edge lengths of the stroke (90 % of the stroke's points; there was none before)
 // and that the pattern view draws that seam's two sides; changes S and checks the piece count changes;
-// hovers a piece for its tooltip; erases the stroke; downloads the DXF. Screenshots go to OUT_DIR. Prints
+// hovers a piece for its tooltip; erases the stroke; draws a grain stroke and checks a piece is turned by it;
+// downloads the DXF. Screenshots go to OUT_DIR. Prints
 // "N passed, M failed"; exit 1 when a check failed.
 // SPDX-License-Identifier: GPL-3.0-or-later
 import { createRequire } from 'node:module';
@@ -135,6 +136,35 @@ try {
   const erasedRun = await waitForRun(page, await page.evaluate(() => window.studio.state.shownRun));
   check('erasing removes the stroke', await page.evaluate(() => window.studio.state.strokes.length) === 0);
   check('erasing runs again', erasedRun > 0);
+
+  // A grain stroke: a short diagonal stroke in "Grain" mode turns the warp of the piece it lies on (a bias
+  // cut): the result has a piece turned by about the stroke's angle to the garment's vertical (the generated
+  // bodice's grain is +z, and the front faces the camera: about 40 degrees on the screen). Fails if the
+  // strokes are not sent, not honoured or given to no piece.
+  await page.click('#mode-grain');
+  const beforeGrain = await page.evaluate(() => window.studio.state.shownRun);
+  const gx0 = box.x + box.width * 0.44, gy0 = box.y + box.height * 0.70;
+  const gx1 = box.x + box.width * 0.52, gy1 = box.y + box.height * 0.60;
+  await page.mouse.move(gx0, gy0);
+  await page.mouse.down();
+  for (let i = 1; i <= 20; ++i) await page.mouse.move(gx0 + (gx1 - gx0) * i / 20, gy0 + (gy1 - gy0) * i / 20);
+  await page.mouse.up();
+  await waitForRun(page, beforeGrain);
+  const grained = await page.evaluate(() => ({ result: window.studio.state.result,
+    grain: window.studio.state.grainStrokes, seams: window.studio.state.strokes }));
+  check('one grain stroke recorded, no seam stroke', grained.grain.length === 1 && grained.seams.length === 0,
+    `(${grained.grain.length}, ${grained.seams.length})`);
+  const turned = grained.result.pieces.filter((piece) => Math.abs(piece.grain_turn_deg || 0) > 1);
+  console.log(`grain stroke: pieces turned ${turned.map((piece) => `${piece.name} ${piece.grain_turn_deg}`).join(', ')}`);
+  check('a piece is turned by the grain stroke (20-70 degrees)', turned.length >= 1 &&
+    turned.every((piece) => Math.abs(piece.grain_turn_deg) >= 20 && Math.abs(piece.grain_turn_deg) <= 70),
+    `(${turned.map((piece) => piece.grain_turn_deg)})`);
+  await page.screenshot({ path: `${outDir}/studio-grain.png` });
+  if (turned.length) {
+    await page.locator(`#pattern polygon.piece[data-name="${turned[0].name}"]`).hover({ force: true });
+    const grainTip = await page.locator('#tooltip').innerText();
+    check('hovering the turned piece names its grain turn', /grain turned/.test(grainTip), `(${grainTip})`);
+  }
 
   // The DXF through the page's download button.
   const [download] = await Promise.all([page.waitForEvent('download', { timeout: 60000 }), page.click('#download-dxf')]);

@@ -71,6 +71,10 @@ bad_run '{"strokes": [[[0, 0, 0]]]}' "strokes[0]: expected 2"
 bad_run '{"strokes": [[[0, 0, 0], [0, 0, "x"]]]}' "finite numbers"
 bad_run '{"strokes": [[[0, 0, 0], [0, 0, 1e999]]]}' "finite numbers"
 bad_run '{"strokes": [[[0, 0, 0], [1e9, 0, 0]]]}' "far from the garment"
+bad_run '{"grain_strokes": [[[0, 0, 0]]]}' "grain_strokes[0]: expected 2"
+bad_run '{"grain_strokes": [[[0, 0, 0], [0, 0, "x"]]]}' "grain_strokes[0][1]: coordinates must be finite numbers"
+bad_run '{"grain_strokes": [[[0, 0, 0], [1e9, 0, 0]]]}' "far from the garment"
+bad_run '{"grain_strokes": 3}' "grain_strokes: expected an array"
 many=$(python3 -c 'print({"strokes": [[[0, 0, 0], [1, 1, 1]]] * 201}.__repr__().replace("\x27", "\""))')
 bad_run "$many" "at most 200"
 long=$(python3 -c 'import json; print(json.dumps({"strokes": [[[0, 0, i * 1e-3] for i in range(5001)]]}))')
