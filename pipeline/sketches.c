@@ -68,17 +68,27 @@ static int sketch_append_welded(pz_sketch *sketch, const pz_prepare_result *prep
     return 1;
 }
 
+/* The curves given in memory (`given`, named `name` in messages) checked against the mesh, and those of the file
+ * `path` (may be NULL; in the mesh's units) read and checked into *from_file (the caller's). */
+static pz_status read_checked(const pz_sketch *given, const char *name, const char *path, const pz_mesh *mesh,
+                              pz_sketch **from_file, pz_ctx *ctx)
+{
+    *from_file = NULL;
+    pz_status status = pz_sketch_check(given, mesh, name, ctx);
+    if (status == PZ_OK && path) {
+        status = pz_sketch_read(path, mesh->unit_scale, from_file, ctx);
+        if (status == PZ_OK)
+            status = pz_sketch_check(*from_file, mesh, path, ctx);
+    }
+    return status;
+}
+
 pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_result *prepared, const pz_mesh *mesh,
                            pz_sketch **out, pz_ctx *ctx)
 {
     *out = NULL;
     pz_sketch *from_file = NULL;
-    pz_status status = pz_sketch_check(options->sketch, mesh, "sketch", ctx);
-    if (status == PZ_OK && options->sketch_path) {
-        status = pz_sketch_read(options->sketch_path, mesh->unit_scale, &from_file, ctx);
-        if (status == PZ_OK)
-            status = pz_sketch_check(from_file, mesh, options->sketch_path, ctx);
-    }
+    pz_status status = read_checked(options->sketch, "sketch", options->sketch_path, mesh, &from_file, ctx);
     if (status != PZ_OK) {
         pz_sketch_free(&from_file);
         return status;
@@ -115,12 +125,8 @@ pz_status pl_gather_grain_hints(const pz_run_options *options, const pz_mesh *me
 {
     *out = NULL;
     pz_sketch *from_file = NULL;
-    pz_status status = pz_sketch_check(options->grain_hints, mesh, "grain hints", ctx);
-    if (status == PZ_OK && options->grain_hints_path) {
-        status = pz_sketch_read(options->grain_hints_path, mesh->unit_scale, &from_file, ctx);
-        if (status == PZ_OK)
-            status = pz_sketch_check(from_file, mesh, options->grain_hints_path, ctx);
-    }
+    pz_status status =
+        read_checked(options->grain_hints, "grain hints", options->grain_hints_path, mesh, &from_file, ctx);
     if (status == PZ_OK)
         status = pl_sketch_join(options->grain_hints, from_file, out, ctx);
     pz_sketch_free(&from_file);

@@ -49,6 +49,14 @@ function coverage(stroke, seams, reach) {
   return { share: close / stroke.length, near };
 }
 
+// A mouse drag from (x0, y0) to (x1, y1) in `steps` moves, as a designer draws a stroke.
+async function drag(page, x0, y0, x1, y1, steps) {
+  await page.mouse.move(x0, y0);
+  await page.mouse.down();
+  for (let i = 1; i <= steps; ++i) await page.mouse.move(x0 + (x1 - x0) * i / steps, y0 + (y1 - y0) * i / steps);
+  await page.mouse.up();
+}
+
 async function waitForRun(page, after) {
   await page.waitForFunction((run) => Number(document.body.dataset.run || 0) > run &&
     window.studio.state.shownRun === window.studio.state.run, after, { timeout: 180000 });
@@ -77,10 +85,7 @@ try {
   // Diagonally over the upper front, where the default layouts put no seam.
   const x0 = box.x + box.width * 0.40, y0 = box.y + box.height * 0.24;
   const x1 = box.x + box.width * 0.60, y1 = box.y + box.height * 0.40;
-  await page.mouse.move(x0, y0);
-  await page.mouse.down();
-  for (let i = 1; i <= 40; ++i) await page.mouse.move(x0 + (x1 - x0) * i / 40, y0 + (y1 - y0) * i / 40);
-  await page.mouse.up();
+  await drag(page, x0, y0, x1, y1, 40);
   const second = await waitForRun(page, first);
   const after = await page.evaluate(() => ({ result: window.studio.state.result, strokes: window.studio.state.strokes }));
   check('one stroke recorded', after.strokes.length === 1, `(${after.strokes.length})`);
@@ -145,10 +150,7 @@ try {
   const beforeGrain = await page.evaluate(() => window.studio.state.shownRun);
   const gx0 = box.x + box.width * 0.44, gy0 = box.y + box.height * 0.70;
   const gx1 = box.x + box.width * 0.52, gy1 = box.y + box.height * 0.60;
-  await page.mouse.move(gx0, gy0);
-  await page.mouse.down();
-  for (let i = 1; i <= 20; ++i) await page.mouse.move(gx0 + (gx1 - gx0) * i / 20, gy0 + (gy1 - gy0) * i / 20);
-  await page.mouse.up();
+  await drag(page, gx0, gy0, gx1, gy1, 20);
   await waitForRun(page, beforeGrain);
   const grained = await page.evaluate(() => ({ result: window.studio.state.result,
     grain: window.studio.state.grainStrokes, seams: window.studio.state.strokes }));
