@@ -236,6 +236,7 @@ typedef struct textile_state {
     double w_stretch, w_rigid, w_dart, w_seam, regularization;
     double grain[3];
     const double *panel_grain_turn; /* pz_textile_options.panel_grain_turn: read by the set-up only (compute_frames) */
+    int brief;                /* few iterations (an evaluation's): the systems are ordered by AMD alone (panel_setup) */
     int threads;
     int parallel;             /* 1: big enough for threads to pay (PARALLEL_MIN_FACES*) */
     int across_panels;        /* parallel and several panels: per-panel loops are split across threads */

@@ -16,6 +16,10 @@
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* A solve of fewer iterations than this (the segmentation's evaluations: 5) factorizes each system a few times
+ * only: the fill METIS saves does not pay for trying it (pz_param_analyze; docs/param.md, "Speed"). */
+#define BRIEF_ITERATIONS 10
 #include <unistd.h>
 
 /* ------------------------------------------------------------------------ */
@@ -232,7 +236,7 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
             int32_t a = state->vertex_local[ends[0]], b = state->vertex_local[ends[1]];
             system->segment_slots[i] = find_slot(su->matrix, a < b ? a : b, a < b ? b : a);
         }
-        system->symbolic = pz_param_analyze(su->matrix, mesh->positions, system->vertices, 1, &su->common);
+        system->symbolic = pz_param_analyze(su->matrix, mesh->positions, system->vertices, !state->brief, &su->common);
         /* The factorization costs `ratio` PCG steps: CHOLMOD's flop count for
          * the factor against two triangular solves and a product, times
          * FACTOR_FLOP_COST (the flops underestimate it below ~50K unknowns:
@@ -703,6 +707,7 @@ static void read_options(pz_textile_solver *solver, const pz_textile_options *op
     if (!options)
         options = &defaults;
     solver->iterations = options->iterations > 0 ? options->iterations : 20;
+    state->brief = solver->iterations < BRIEF_ITERATIONS;
     solver->tolerance = options->tolerance > 0 ? options->tolerance : 1e-6;
     solver->on_iteration = options->on_iteration;
     solver->user = options->user;
