@@ -22,6 +22,7 @@ const char pz_cli_run_usage[] =
     "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S] [--max-pieces N]\n"
     "           [--pose FILE]... [--sketch FILE] [--panels FILE|uv]\n"
     "           [--symmetry auto|off|x|y|z|PLANE] [--fold] [--darts on|off] [--truing on|off]\n"
+    "           [--consolidate on|off]\n"
     "           [--grain X,Y,Z] [--grain-hints FILE]\n"
     "           [--prepare auto|off] [--backend textile|lscm|wirewarp|springmass]\n"
     "           [--iterations N] [--weights S,R,D,M] [--fabric KSU,KSV,KR]\n"
@@ -63,6 +64,10 @@ const char pz_cli_run_usage[] =
     "  --fold               draw a piece that is its own mirror image as its half,\n"
     "                       to be cut on the fold (the fold line marked)\n"
     "  --darts on|off       insert darts where a seam can be partly closed (default on)\n"
+    "  --consolidate on|off on (default): once the layout of a garment with a mirror\n"
+    "                       plane meets its goals, it is made again with one piece\n"
+    "                       fewer and kept when that meets them too, with no more\n"
+    "                       seam on the plane (off: the greedy layout as made)\n"
     "  --truing on|off      smooth the seams traced along mesh edges into clean lines\n"
     "                       by moving their vertices along the surface (default on;\n"
     "                       off keeps garment.obj's positions exactly the input's)\n"
@@ -220,6 +225,8 @@ static pz_status parse_run_options(const pz_cli_args *args, pz_run_options *opti
     }
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_TRUING)))
         status = parse_on_off("--truing", text, &options->truing, ctx);
+    if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_CONSOLIDATE)))
+        status = parse_on_off("--consolidate", text, &options->consolidate, ctx);
     if (status == PZ_OK && (text = pz_cli_value(args, PZ_CLI_OPT_SKETCH))) {
         if (!*text)
             return pz_error(ctx, PZ_ERR_USAGE, "run: --sketch: empty file name");

@@ -18,6 +18,7 @@
  */
 #define _POSIX_C_SOURCE 200809L
 #include "pipeline/internal.h"
+#include "core/vec.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -56,6 +57,7 @@ void pz_run_options_default(pz_run_options *options)
     pz_goal_options_default(&options->goals);
     pz_segment_options_default(&options->segment);
     options->truing = 1;
+    options->consolidate = 1;
     pz_flatten_options_default(&options->flatten);
     pz_export_options_default(&options->output);
 }
@@ -360,11 +362,16 @@ static pz_status redo_as_loaded(pipeline_run *run, pz_result *result, pz_ctx *ct
     return status == PZ_OK ? flatten_rounds(run, result, ctx) : status;
 }
 
-static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_run_options *options, int from_run,
+/*
+ * The run up to its verdict: load (prepare, symmetrize), the panels (the
+ * segmentation's, with its rounds, or the user's), the flattening, the
+ * metrics, the final verdict (pz_run) and the layout's curves; *out is the
+ * caller's (NULL on error). finish() makes the rest.
+ */
+static pz_status lay_out(const pz_mesh *mesh, const pz_panels *panels, const pz_run_options *options, int from_run,
                          pz_result **out, pz_ctx *ctx)
 {
     *out = NULL;
-    double start = pz_seconds();
     pz_result *result = calloc(1, sizeof *result);
     if (!result)
         return pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", from_run ? "run" : "flatten");
@@ -414,14 +421,32 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
     }
     if (status == PZ_OK && from_run)
         status = pl_final_verdict(result, !result->segment || result->segment->goals_met, ctx);
-    if (status == PZ_OK && from_run)
+    if (status == PZ_OK)
+        status = build_layout_curves(result, ctx);
+    pipeline_run_clear(&run);
+    result->options.panels = NULL;  /* the caller's, and not needed beyond this call */
+    if (status == PZ_OK)
+        status = pz_check_cancel(ctx, pl_who(result));
+    if (status != PZ_OK) {
+        pz_result_free(&result);
+        return status;
+    }
+    *out = result;
+    return PZ_OK;
+}
+
+/* The rest of a run laid out (lay_out): the trade-off, mirror pieces, names, the pieces and the marker; the
+ * total time from `start`. The result stays the caller's (freed by it on error too). */
+static pz_status finish(pz_result *result, double start, pz_ctx *ctx)
+{
+    int from_run = result->from_run;
+    pz_status status = PZ_OK;
+    if (from_run)
         status = pl_measure_tradeoff(result, ctx);
     if (status == PZ_OK)
         status = find_mirror_panels(result, ctx);
     if (status == PZ_OK && from_run)
         status = pl_name_pieces(result, ctx);
-    if (status == PZ_OK)
-        status = build_layout_curves(result, ctx);
     if (status == PZ_OK)
         pl_measure_pattern_symmetry(result, ctx);
     double mark = pz_seconds();
@@ -436,24 +461,142 @@ static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_
     }
     result->timings.pieces = pz_elapsed_ms(mark, pz_seconds());
     result->timings.total = pz_elapsed_ms(start, pz_seconds());
-    pipeline_run_clear(&run);
     pz_progress_range(ctx, 0, 0);
-    result->options.panels = NULL;  /* the caller's, and not needed beyond this call */
     if (status == PZ_OK)
         status = pz_check_cancel(ctx, pl_who(result));
-    if (status != PZ_OK) {
-        pz_result_free(&result);
-        return status;
+    if (status == PZ_OK)
+        pz_progress(ctx, "done", 1, "%d panels", (int)result->pattern->panel_count);
+    return status;
+}
+
+static pz_status execute(const pz_mesh *mesh, const pz_panels *panels, const pz_run_options *options, int from_run,
+                         pz_result **out, pz_ctx *ctx)
+{
+    double start = pz_seconds();
+    pz_status status = lay_out(mesh, panels, options, from_run, out, ctx);
+    if (status == PZ_OK && (status = finish(*out, start, ctx)) != PZ_OK)
+        pz_result_free(out);
+    return status;
+}
+
+/* ---------------------------------------------------------------- consolidation */
+
+/*
+ * The length (mm) of the layout's seams that lie on the mirror plane: a seam
+ * edge whose two ends are on it (within CONSOLIDATION_PLANE_TOLERANCE of the
+ * garment's bounding-box diagonal; the symmetric garment has its plane
+ * vertices exactly on it).
+ */
+#define CONSOLIDATION_PLANE_TOLERANCE 1e-3
+static double plane_seam_length(const pz_result *result)
+{
+    const pz_mesh *mesh = result->garment;
+    const double *n = result->symmetry.normal, d = result->symmetry.offset;
+    double lo[3], hi[3];
+    pz_mesh_bbox(mesh, lo, hi);
+    double tolerance = CONSOLIDATION_PLANE_TOLERANCE * sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) +
+                                                            (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                                            (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    double length = 0;
+    for (int32_t c = 0; c < result->layout_curve_count; ++c) {
+        if (result->layout_is_dart && result->layout_is_dart[c])
+            continue;
+        for (int32_t i = result->layout_offsets[c]; i + 1 < result->layout_offsets[c + 1]; ++i) {
+            const double *a = mesh->positions + 3 * (size_t)result->layout_vertices[i];
+            const double *b = mesh->positions + 3 * (size_t)result->layout_vertices[i + 1];
+            if (fabs(pz_vec3_dot(n, a) - d) <= tolerance && fabs(pz_vec3_dot(n, b) - d) <= tolerance)
+                length += pz_vec3_distance(a, b);
+        }
     }
-    pz_progress_range(ctx, 0, 0);
-    pz_progress(ctx, "done", 1, "%d panels", (int)result->pattern->panel_count);
-    *out = result;
+    return length;
+}
+
+/* 1 when the run's layout may have one piece too many: a layout of three or more pieces of a garment with a
+ * mirror plane that met every goal, laid out by the segmentation with no piece budget (the designer's count
+ * stands) and not a looser goal's layout written for an impossible one. */
+static int worth_consolidating(const pz_result *result)
+{
+    const pz_run_options *options = &result->options;
+    pz_goal_options defaults;
+    pz_goal_options_default(&defaults);
+    /* Goals stricter than the defaults are laid out over the ladder of looser ones, whose final cuts they keep
+     * so that a stricter goal never has fewer pieces (docs/segment.md, "Monotone panel counts"); a layout made
+     * again with a budget would not keep them, so those runs stand as laid out. */
+    int stricter = options->goals.max_strain < defaults.max_strain || options->goals.max_corners < defaults.max_corners;
+    return options->consolidate && result->segment && result->verdict.judged && result->verdict.goals_met &&
+           !options->panels &&
+           options->segment.max_pieces <= 0 && result->symmetry.found && result->garment && !stricter &&
+           result->looser_written_strain <= 0 && result->pattern->panel_count >= 3;
+}
+
+/*
+ * Fewer pieces where every goal allows (pietroni2022 Fig. 11: the seam on the
+ * mirror plane removed where the goals allow; docs/run.md, "Consolidation").
+ * The greedy layout judges its removals on quick flattenings of the traced
+ * seams, and keeps seams the goals would let go: the DiffAvatar T-shirt's
+ * front in two mirror halves (merged, its traced outline counts 12 corners
+ * against C = 8), the shirt in 7 pieces where front, back and two sleeves
+ * meet every goal. So once the run's layout meets its goals, the run is made
+ * again as `--max-pieces N-1` makes it (the layout merged down, mirror pairs
+ * together, judged on its joint flattening, laid out again without the plane
+ * when that misses), and that pattern replaces the first when it too meets
+ * every goal and has no more seam on the mirror plane (Fig. 11's direction:
+ * the budget could otherwise trade side seams for a centre front and back,
+ * cutting a tube bodice into left and right halves). *first is replaced or
+ * kept; the notes say which.
+ */
+static pz_status consolidate(const pz_mesh *garment, pz_result **first, pz_ctx *ctx)
+{
+    if (!worth_consolidating(*first))
+        return PZ_OK;
+    double start = pz_seconds();
+    int32_t pieces = (*first)->pattern->panel_count;
+    pz_run_options fewer = (*first)->options;
+    fewer.segment.max_pieces = pieces - 1;
+    fewer.output.garment_name = NULL; /* the first result's: set again from the name */
+    pz_ctx quiet;
+    pz_ctx_quiet(ctx, &quiet);
+    pz_result *second = NULL;
+    pz_progress(ctx, "consolidate", 0.9, "at most %d pieces", (int)pieces - 1);
+    pz_status status = lay_out(garment, NULL, &fewer, 1, &second, &quiet);
+    if (status == PZ_ERR_CANCELLED || status == PZ_ERR_NOMEM)
+        return pz_error(ctx, status, "run: %s", quiet.error);
+    int kept = status == PZ_OK && second->verdict.goals_met && second->pattern->panel_count < pieces &&
+               second->symmetry.found &&
+               plane_seam_length(second) <= plane_seam_length(*first) + 1e-6;
+    pz_note(ctx, "run: consolidation: the layout of at most %d pieces has %d%s (%.0f ms)%s", (int)pieces - 1,
+            second ? (int)second->pattern->panel_count : 0,
+            !second ? ", not made"
+                    : !second->verdict.goals_met ? ", goals missed"
+                    : kept ? ", every goal met" : ", more seam on the mirror plane",
+            pz_elapsed_ms(start, pz_seconds()), kept ? ": kept" : ": the first stands");
+    if (!kept) {
+        pz_result_free(&second);
+        return PZ_OK;
+    }
+    /* No budget was asked for: the report shows none, and says where the pieces came from. */
+    second->options.segment.max_pieces = 0;
+    if (second->segment) {
+        second->segment->max_pieces = 0;
+        second->segment->budget_met = 1;
+    }
+    second->consolidated_from = pieces;
+    pz_result_free(first);
+    *first = second;
     return PZ_OK;
 }
 
 pz_status pz_run(const pz_mesh *garment, const pz_run_options *options, pz_result **out, pz_ctx *ctx)
 {
-    return execute(garment, options ? options->panels : NULL, options, 1, out, ctx);
+    double start = pz_seconds();
+    pz_status status = lay_out(garment, options ? options->panels : NULL, options, 1, out, ctx);
+    if (status == PZ_OK)
+        status = consolidate(garment, out, ctx);
+    if (status == PZ_OK)
+        status = finish(*out, start, ctx);
+    if (status != PZ_OK)
+        pz_result_free(out);
+    return status;
 }
 
 pz_status pz_flatten(const pz_mesh *garment, const pz_panels *panels, const pz_run_options *options,

@@ -133,6 +133,8 @@ typedef struct pz_run_options {
                                         stroke along which the warp runs in the piece it lies on (docs/run.md) */
     const pz_sketch *grain_hints;    /* or the same in memory (millimetres); both may be given */
     int truing;                      /* 1 (default): seams traced along mesh edges are smoothed on the surface */
+    int consolidate;                 /* 1 (default): a layout that met its goals is made again with one piece fewer
+                                        and kept when that meets them too (docs/run.md, "Consolidation") */
     /* param */
     pz_flatten_options flatten;
     /* export */
@@ -313,6 +315,9 @@ typedef struct pz_result {
                                         with looser_probe_panels panels) and the looser settings were laid out each
                                         on its own from the outlook's suggestion up (docs/run.md, "Impossible goals") */
     int32_t looser_probe_panels;
+    int32_t consolidated_from;       /* > 0: the layout first made had this many pieces; the run made it again with
+                                        a budget of one fewer, and that pattern met every goal (docs/run.md,
+                                        "Consolidation") */
     pz_strain_outlook outlook;       /* can S be met: taken before the segmentation */
     pz_segment_tradeoff tradeoff;    /* the final layout's merge sequence (count 0: not measured): the pieces each
                                         strain goal needs (pz_tradeoff_pieces; docs/run.md, "The trade-off") */

@@ -613,6 +613,9 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
         ok &= add_plain_number(truing, "mean_turn_after_deg", pz_round(t->mean_turn_after_deg, 2));
     }
     ok &= add_plain_number(object, "vetoed_panels", result->vetoed_panels);
+    ok &= cJSON_AddBoolToObject(object, "consolidate", result->options.consolidate) != NULL;
+    if (result->consolidated_from > 0) /* the first layout's pieces, before consolidation (docs/run.md) */
+        ok &= add_plain_number(object, "consolidated_from", result->consolidated_from);
     /* Monotone panel counts: the looser settings laid out first, their cuts kept (docs/segment.md). */
     cJSON *ladder = cJSON_AddObjectToObject(object, "looser_goals");
     ok &= ladder != NULL;
