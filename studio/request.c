@@ -226,6 +226,10 @@ static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_opti
         if (!cJSON_IsBool(item))
             return pz_error(ctx, PZ_ERR_USAGE, "darts: expected true or false");
         options->segment.darts = cJSON_IsTrue(item);
+    } else if (strcmp(key, "consolidate") == 0) {
+        if (!cJSON_IsBool(item))
+            return pz_error(ctx, PZ_ERR_USAGE, "consolidate: expected true or false");
+        options->consolidate = cJSON_IsTrue(item);
     } else if (strcmp(key, "symmetry") == 0)
         status = read_symmetry(item, &options->segment, ctx);
     else if (strcmp(key, "fabric") == 0)
@@ -236,7 +240,7 @@ static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_opti
         status = read_strokes(item, "grain_strokes", mesh, grain, ctx);
     else
         status = pz_error(ctx, PZ_ERR_USAGE, "%s: not an option (max_strain, max_corners, max_pieces, darts, "
-                          "symmetry, fabric, strokes, grain_strokes)", key);
+                          "consolidate, symmetry, fabric, strokes, grain_strokes)", key);
     return status;
 }
 

@@ -18,6 +18,7 @@ const state = {
   shownRun: 0,          // the run whose result is shown
   result: null,
   mode: 'orbit',
+  refining: false,      // the run shown next is the consolidated one of the quick layout shown now
   error: '',
 };
 window.studio = { state, project };
@@ -266,8 +267,11 @@ function setMode(mode) {
 
 // ---------------------------------------------------------------- runs
 
-function runOptions() {
+// consolidate: the run's consolidation (docs/run.md, "Consolidation"); the page asks for a quick layout first
+// and, with "fewest pieces" ticked, a consolidated one once it is shown (refine).
+function runOptions(consolidate) {
   const options = {
+    consolidate,
     max_strain: Number($('max-strain').value),
     max_corners: Number($('max-corners').value),
     max_pieces: Number($('max-pieces').value),
@@ -281,10 +285,12 @@ function runOptions() {
 }
 
 let polling = null;
-async function startRun() {
+async function startRun(refine = false) {
   if (!state.garment) return;
+  state.refining = refine === true;
+  document.body.dataset.refining = state.refining ? '1' : '';
   try {
-    const answer = await api('POST', `/api/garments/${state.garment.id}/run`, runOptions());
+    const answer = await api('POST', `/api/garments/${state.garment.id}/run`, runOptions(state.refining));
     state.run = answer.run;
     $('cancel').disabled = false;
     $('progress-text').style.color = '';
@@ -302,8 +308,12 @@ async function poll() {
     if (status.run === state.run && status.state !== 'running') {
       polling = null;
       $('cancel').disabled = true;
-      if (status.state === 'done') await showResult(status.ms);
-      else if (status.state === 'failed') showError(status.error);
+      if (status.state === 'done') {
+        await showResult(status.ms);
+        // The quick layout is shown; with "fewest pieces" ticked, its consolidated run follows.
+        if (!state.refining && $('consolidate').checked) await startRun(true);
+        else state.refining = false, document.body.dataset.refining = '';
+      } else if (status.state === 'failed') showError(status.error);
       else $('progress-text').textContent = 'cancelled';
       return;
     }
@@ -480,7 +490,7 @@ $('upload').addEventListener('change', async () => {
 });
 $('run').addEventListener('click', startRun);
 $('cancel').addEventListener('click', () => api('POST', `/api/garments/${state.garment.id}/cancel`, {}));
-for (const id of ['max-strain', 'max-corners', 'max-pieces', 'darts', 'symmetry', 'fabric'])
+for (const id of ['max-strain', 'max-corners', 'max-pieces', 'darts', 'consolidate', 'symmetry', 'fabric'])
   $(id).addEventListener('change', startRun);
 for (const mode of ['orbit', 'draw', 'grain', 'erase']) $(`mode-${mode}`).addEventListener('click', () => setMode(mode));
 

@@ -59,7 +59,8 @@ async function drag(page, x0, y0, x1, y1, steps) {
 
 async function waitForRun(page, after) {
   await page.waitForFunction((run) => Number(document.body.dataset.run || 0) > run &&
-    window.studio.state.shownRun === window.studio.state.run, after, { timeout: 180000 });
+    window.studio.state.shownRun === window.studio.state.run && !window.studio.state.refining, after,
+  { timeout: 180000 });
   return page.evaluate(() => window.studio.state.shownRun);
 }
 
