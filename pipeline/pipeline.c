@@ -511,6 +511,17 @@ static double plane_seam_length(const pz_result *result)
     return length;
 }
 
+/* 1 unless the first pattern's mirror pieces were all exact ("Cut 2": one piece drafted, cut twice) and the
+ * second's are not: fewer pieces are no gain when a pair can no longer be cut from one piece (the T-shirt's
+ * four pieces, laid out on the garment as loaded, could not be made exact within S). */
+static int exact_as_before(const pz_result *first, const pz_result *second)
+{
+    int first_exact = first->symmetry_used && first->mirror_pieces > 0 &&
+                      first->exact_mirror_pieces == first->mirror_pieces;
+    int second_exact = !second->symmetry_used || second->exact_mirror_pieces == second->mirror_pieces;
+    return !first_exact || second_exact;
+}
+
 /* 1 when the run's layout may have one piece too many: a layout of three or more pieces of a garment with a
  * mirror plane that met every goal, laid out by the segmentation with no piece budget (the designer's count
  * stands) and not a looser goal's layout written for an impossible one. */
@@ -561,14 +572,16 @@ static pz_status consolidate(const pz_mesh *garment, pz_result **first, pz_ctx *
     pz_status status = lay_out(garment, NULL, &fewer, 1, &second, &quiet);
     if (status == PZ_ERR_CANCELLED || status == PZ_ERR_NOMEM)
         return pz_error(ctx, status, "run: %s", quiet.error);
-    int kept = status == PZ_OK && second->verdict.goals_met && second->pattern->panel_count < pieces &&
-               second->symmetry.found &&
-               plane_seam_length(second) <= plane_seam_length(*first) + 1e-6;
+    int fewer_met = status == PZ_OK && second->verdict.goals_met && second->pattern->panel_count < pieces;
+    int plane_kept = fewer_met && second->symmetry.found &&
+                     plane_seam_length(second) <= plane_seam_length(*first) + 1e-6;
+    int kept = plane_kept && exact_as_before(*first, second);
     pz_note(ctx, "run: consolidation: the layout of at most %d pieces has %d%s (%.0f ms)%s", (int)pieces - 1,
             second ? (int)second->pattern->panel_count : 0,
             !second ? ", not made"
-                    : !second->verdict.goals_met ? ", goals missed"
-                    : kept ? ", every goal met" : ", more seam on the mirror plane",
+                    : !fewer_met ? ", goals missed"
+                    : !plane_kept ? ", more seam on the mirror plane"
+                    : !kept ? ", its mirror pieces not exact" : ", every goal met",
             pz_elapsed_ms(start, pz_seconds()), kept ? ": kept" : ": the first stands");
     if (!kept) {
         pz_result_free(&second);
