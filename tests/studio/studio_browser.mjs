@@ -75,7 +75,13 @@ try {
   const outside = [];
   page.on('request', (request) => { if (!request.url().startsWith(url)) outside.push(request.url()); });
   await page.goto(url);
-  const first = await waitForRun(page, 0);
+  const opened = await waitForRun(page, 0);
+  // The first layout came with its consolidated run ("fewest pieces", ticked by default). The checks below
+  // are of strokes, S and downloads: without consolidation each edit costs one run, not two (the
+  // sanitizer build's runs are several times slower); consolidation is the CLI tests' (test_cli_consolidate).
+  check('the page opened with "fewest pieces" ticked', await page.isChecked('#consolidate'));
+  await page.uncheck('#consolidate');
+  const first = await waitForRun(page, opened);
   const before = await page.evaluate(() => ({ result: window.studio.state.result, garment: window.studio.state.garment }));
   const reach = 2 * before.garment.mean_edge_mm;
   await page.screenshot({ path: `${outDir}/studio-loaded.png` });

@@ -38,7 +38,8 @@ if [ "$code" != 200 ]; then
     exit 77
 fi
 export PZ_CHROMIUM=$CHROMIUM
-timeout 300 node "$(dirname "$0")/studio_browser.mjs" "$URL" "$NPM_DIR" "$OUT"
+# Ten minutes: the sanitizer build's runs are several times slower than the release build's.
+timeout 600 node "$(dirname "$0")/studio_browser.mjs" "$URL" "$NPM_DIR" "$OUT"
 node_rc=$?
 check "the browser checks: exit $node_rc (screenshots in $OUT)" [ "$node_rc" -eq 0 ]
 for shot in studio-loaded studio-stroke studio-strict; do
