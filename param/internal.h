@@ -18,6 +18,8 @@
 
 #include "param/param.h"
 
+#include <math.h>
+
 #include <cholmod.h>
 
 /* Local frame of face `face` (3 vertex ids into pos, n x 3): the 2D coordinates
@@ -33,6 +35,17 @@ double pz_param_face_frame(const double *pos, const int32_t *face, double local[
  * all of them. */
 double pz_param_grain_angle(const pz_mesh *mesh, const int32_t *face_ids, int32_t face_count, const double grain[3],
                             double turn, const double *uv);
+
+/* (a, b), a direction in a face's frame (e1, e2) (pz_param_face_frame: (e1, e2, n) right-handed), turned by
+ * `turn` radians about the face normal: a grain hint's turn of the warp (pz_textile_options.panel_grain_turn). */
+static inline void pz_param_turn_in_frame(double turn, double *a, double *b)
+{
+    if (turn == 0 || !isfinite(turn))
+        return;
+    double c = cos(turn), s = sin(turn), turned = c * *a - s * *b;
+    *b = s * *a + c * *b;
+    *a = turned;
+}
 
 /* Rotates the uv of the listed vertices by `angle` about their centroid. */
 void pz_param_rotate_vertices(const int32_t *vertex_ids, int32_t vertex_count, double angle, double *uv);

@@ -88,7 +88,6 @@ double pz_param_face_frame(const double *pos, const int32_t *face, double local[
 double pz_param_grain_angle(const pz_mesh *mesh, const int32_t *face_ids, int32_t face_count, const double grain[3],
                             double turn, const double *uv)
 {
-    double turn_cos = cos(turn), turn_sin = sin(turn);
     double glen = sqrt(grain[0] * grain[0] + grain[1] * grain[1] + grain[2] * grain[2]);
     if (glen <= 0)
         return 0;
@@ -102,10 +101,9 @@ double pz_param_grain_angle(const pz_mesh *mesh, const int32_t *face_ids, int32_
             continue;
         area_sum += area;
         /* The grain in the frame: its projection onto the plane is (a, b). */
-        double a0 = g[0] * e1[0] + g[1] * e1[1] + g[2] * e1[2];
-        double b0 = g[0] * e2[0] + g[1] * e2[1] + g[2] * e2[2];
-        /* Turned about the normal: (e1, e2, n) is right-handed (pz_param_face_frame). */
-        double a = turn_cos * a0 - turn_sin * b0, b = turn_sin * a0 + turn_cos * b0;
+        double a = g[0] * e1[0] + g[1] * e1[1] + g[2] * e1[2];
+        double b = g[0] * e2[0] + g[1] * e2[1] + g[2] * e2[2];
+        pz_param_turn_in_frame(turn, &a, &b);
         double projected = sqrt(a * a + b * b);
         if (projected < 1e-9)
             continue;

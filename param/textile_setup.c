@@ -297,14 +297,8 @@ static void compute_frames(textile_state *state)
                                               e1, e2);
             if (p == 0) {
                 double a = dot3(state->grain, e1), b = dot3(state->grain, e2);
-                /* A grain hint turns the panel's warp about the face normal ((e1, e2, n) right-handed). */
-                double turn = state->panel_grain_turn ? state->panel_grain_turn[state->pattern->face_panel[f]] : 0;
-                if (turn != 0 && isfinite(turn)) {
-                    double c = cos(turn), s = sin(turn);
-                    double turned = c * a - s * b;
-                    b = s * a + c * b;
-                    a = turned;
-                }
+                if (state->panel_grain_turn) /* a grain hint turns the panel's warp about the face normal */
+                    pz_param_turn_in_frame(state->panel_grain_turn[state->pattern->face_panel[f]], &a, &b);
                 state->areas[f] = area;
                 state->grain_local[2 * f] = a;
                 state->grain_local[2 * f + 1] = b;

@@ -79,21 +79,21 @@ static int32_t nearest_face(const pz_mesh *mesh, const double point[3])
 static double turn_on_face(const pz_mesh *mesh, int32_t f, const double grain[3], const double axis[3])
 {
     const int32_t *v = mesh->faces + 3 * (size_t)f;
-    const double *a = mesh->positions + 3 * (size_t)v[0], *b = mesh->positions + 3 * (size_t)v[1],
-                 *c = mesh->positions + 3 * (size_t)v[2];
-    double ab[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, ac[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-    double n[3] = {ab[1] * ac[2] - ab[2] * ac[1], ab[2] * ac[0] - ab[0] * ac[2], ab[0] * ac[1] - ab[1] * ac[0]};
-    double length = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    const double *p0 = mesh->positions + 3 * (size_t)v[0];
+    double ab[3], ac[3], n[3], g[3], h[3], cross[3];
+    pz_vec3_sub(mesh->positions + 3 * (size_t)v[1], p0, ab);
+    pz_vec3_sub(mesh->positions + 3 * (size_t)v[2], p0, ac);
+    pz_vec3_cross(ab, ac, n);
+    double length = pz_vec3_norm(n);
     if (!(length > 0))
         return 0;
-    double g[3], h[3], gn = 0, hn = 0;
+    double gn = 0, hn = 0;
     for (int k = 0; k < 3; ++k)
         n[k] /= length, gn += grain[k] * n[k], hn += axis[k] * n[k];
-    for (int k = 0; k < 3; ++k)
+    for (int k = 0; k < 3; ++k) /* both projected on the face */
         g[k] = grain[k] - gn * n[k], h[k] = axis[k] - hn * n[k];
-    double cross[3] = {g[1] * h[2] - g[2] * h[1], g[2] * h[0] - g[0] * h[2], g[0] * h[1] - g[1] * h[0]};
-    double sine = cross[0] * n[0] + cross[1] * n[1] + cross[2] * n[2];
-    double cosine = g[0] * h[0] + g[1] * h[1] + g[2] * h[2];
+    pz_vec3_cross(g, h, cross);
+    double sine = pz_vec3_dot(cross, n), cosine = pz_vec3_dot(g, h);
     return sine == 0 && cosine == 0 ? 0 : atan2(sine, cosine);
 }
 
