@@ -86,6 +86,7 @@
 #define PZ_CLI_OPT_ROOT (UINT64_C(1) << 55) /* --root DIR (studio) */
 #define PZ_CLI_OPT_GRAIN_HINTS (UINT64_C(1) << 56) /* --grain-hints FILE (flatten, run) */
 #define PZ_CLI_OPT_CONSOLIDATE (UINT64_C(1) << 57) /* --consolidate on|off (run) */
+#define PZ_CLI_OPT_MIRROR_SKETCH (UINT64_C(1) << 58) /* --mirror-sketch (run; a flag: stored as the value "1") */
 
 /* `batch`: the batch ran, but one garment or more failed (summary.csv says which and why): exit 1. */
 #define PZ_CLI_BATCH_FAILED ((pz_status)1)
@@ -98,7 +99,7 @@
 
 /** Index of a raw-text option in pz_cli_args.values (bit position - PZ_CLI_VALUE_FIRST_BIT). */
 #define PZ_CLI_VALUE_FIRST_BIT 9
-#define PZ_CLI_VALUE_COUNT 49 /* up to bit 57 (--consolidate) */
+#define PZ_CLI_VALUE_COUNT 50 /* up to bit 58 (--mirror-sketch) */
 static inline int pz_cli_value_index(uint64_t flag)
 {
     int bit = 0;
@@ -121,7 +122,8 @@ static inline int pz_cli_value_index(uint64_t flag)
      PZ_CLI_OPT_SKETCH | PZ_CLI_OPT_MAX_CORNERS | PZ_CLI_OPT_MAX_STRAIN | PZ_CLI_OPT_SYMMETRY |                 \
      PZ_CLI_OPT_PREPARE | PZ_CLI_OPT_TRUING | PZ_CLI_OPT_MAX_SEAM_MISMATCH | PZ_CLI_OPT_MIN_PIECE_WIDTH |       \
      PZ_CLI_OPT_MIN_PIECE_AREA | PZ_CLI_OPT_MIN_DART_INTAKE | PZ_CLI_OPT_STRICT | PZ_CLI_OPT_FOLD |             \
-     PZ_CLI_OPT_MAX_PIECES | PZ_CLI_OPT_GRAIN_HINTS | PZ_CLI_OPT_CONSOLIDATE | PZ_CLI_OPT_EXPORT)
+     PZ_CLI_OPT_MAX_PIECES | PZ_CLI_OPT_GRAIN_HINTS | PZ_CLI_OPT_CONSOLIDATE | PZ_CLI_OPT_MIRROR_SKETCH |      \
+     PZ_CLI_OPT_EXPORT)
 
 /** The options of `batch`: run's (--panels uv only), but --pose (per garment: a manifest's), and its own. */
 #define PZ_CLI_OPT_BATCH                                                                                         \

@@ -20,7 +20,7 @@
 
 const char pz_cli_run_usage[] =
     "usage: panelize run GARMENT -o DIR [--max-corners C] [--max-strain S] [--max-pieces N]\n"
-    "           [--pose FILE]... [--sketch FILE] [--panels FILE|uv]\n"
+    "           [--pose FILE]... [--sketch FILE] [--mirror-sketch] [--panels FILE|uv]\n"
     "           [--symmetry auto|off|x|y|z|PLANE] [--fold] [--darts on|off] [--truing on|off]\n"
     "           [--consolidate on|off]\n"
     "           [--grain X,Y,Z] [--grain-hints FILE]\n"
@@ -72,7 +72,11 @@ const char pz_cli_run_usage[] =
     "                       by moving their vertices along the surface (default on;\n"
     "                       off keeps garment.obj's positions exactly the input's)\n"
     "  --sketch FILE        JSON {\"curves\": [[[x,y,z], ...], ...]} in the garment's\n"
-    "                       units: curves that become seams, never removed\n"
+    "                       units: curves that become seams, never removed. On a\n"
+    "                       garment with a mirror plane, a sketch that is not\n"
+    "                       symmetric lays the garment out without the plane\n"
+    "  --mirror-sketch      draw each sketch curve's mirror image too (about the\n"
+    "                       garment's plane, when one is found): symmetric pieces\n"
     "  --panels FILE|uv     the user's own panels (see panelize flatten): no\n"
     "                       segmentation, no preparation\n"
     "  --prepare auto|off   auto (default): weld, repair and remesh the garment\n"
@@ -232,6 +236,7 @@ static pz_status parse_run_options(const pz_cli_args *args, pz_run_options *opti
             return pz_error(ctx, PZ_ERR_USAGE, "run: --sketch: empty file name");
         options->sketch_path = text;
     }
+    options->mirror_sketch = pz_cli_value(args, PZ_CLI_OPT_MIRROR_SKETCH) != NULL;
     if (status == PZ_OK && args->positional_count > 1)
         status = pz_error(ctx, PZ_ERR_USAGE, "run: expected one GARMENT, got %d files", args->positional_count);
     if (status == PZ_OK) /* the ranges: the library's, shared with the Python package */

@@ -130,6 +130,7 @@ static const option_spec option_table[] = {
     {"root", 0, PZ_CLI_OPT_ROOT, 1},
     {"grain-hints", 0, PZ_CLI_OPT_GRAIN_HINTS, 1},
     {"consolidate", 0, PZ_CLI_OPT_CONSOLIDATE, 1},
+    {"mirror-sketch", 0, PZ_CLI_OPT_MIRROR_SKETCH, 0},
 };
 static const size_t option_table_count = sizeof option_table / sizeof option_table[0];
 

@@ -144,12 +144,38 @@ pz_status pl_user_correspondences(const pz_panels *panels, const pl_garment *gar
 /* ---------------------------------------------------------------- segmentation.c */
 
 /**
- * The user's sketches (options->sketch in memory, then options->sketch_path) plus the seams `prepared` welded
- * (a designer's seams survive the weld), in one sketch in the garment's millimetres; *out NULL when there is
- * none, else the caller frees it (pz_sketch_free). A sketch off the surface is a data error naming it.
+ * The user's sketches (options->sketch in memory, then options->sketch_path; with options->mirror_sketch and
+ * a `plane` (may be NULL), each stroke's mirror image too), options->garment_seams, and the seams `prepared`
+ * welded (a designer's seams survive the weld), in one sketch in the garment's millimetres; *out NULL when
+ * there is none, else the caller frees it (pz_sketch_free). A sketch off the surface is a data error naming it.
  */
 pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_result *prepared, const pz_mesh *mesh,
-                           pz_sketch **out, pz_ctx *ctx);
+                           const pz_symmetry *plane, pz_sketch **out, pz_ctx *ctx);
+
+/**
+ * The designer's strokes alone (options->sketch, then options->sketch_path), checked against the mesh;
+ * *out NULL when there are none, else the caller's (pz_sketch_free).
+ */
+pz_status pl_designer_sketch(const pz_run_options *options, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx);
+
+/** How far a stroke's mirror image may lie from a stroke and still count as it: 2 % of the mesh's diagonal, at
+ * least 10 mm (a stroke drawn by hand on each side) and two mean edge lengths (strokes through vertices). */
+double pl_sketch_mirror_tolerance(const pz_mesh *mesh);
+
+/**
+ * *symmetric = 1 when every curve of `sketch` (may be NULL) mirrored through `plane` lies, for 90 % of its
+ * length, within `tolerance` of the sketch (its own image on the plane, or another stroke); 1 without a sketch
+ * or a plane. Bounded: at most about 20,000 samples whatever the sketch. PZ_ERR_NOMEM.
+ */
+pz_status pl_sketch_symmetric(const pz_sketch *sketch, const pz_symmetry *plane, double tolerance, int *symmetric,
+                              pz_ctx *ctx);
+
+/** The same for the designer's sketch of a run (pl_designer_sketch) with pl_sketch_mirror_tolerance. */
+pz_status pl_sketch_symmetric_on(const pz_run_options *options, const pz_mesh *mesh, const pz_symmetry *plane,
+                                 int *symmetric, pz_ctx *ctx);
+
+/** Appends the mirror image through `plane` of every curve of `sketch` that has none (the test above). */
+pz_status pl_sketch_add_mirrors(pz_sketch *sketch, const pz_symmetry *plane, double tolerance, pz_ctx *ctx);
 
 /** The automatic layout's state across verdict rounds (opaque). */
 typedef struct pl_segmenter pl_segmenter;

@@ -95,7 +95,12 @@ pz_status pl_symmetrize_garment(const pz_run_options *options, pz_result *result
     pz_ctx quiet;
     pz_ctx_quiet(ctx, &quiet);
     pz_status status = detect_plane(options, mesh, &found, ctx);
-    if (status != PZ_OK || !found.found) {
+    /* Strokes on one side only: the layout is made without the plane (the segmentation says so), and so on the
+     * garment as it is. */
+    int symmetric = 1;
+    if (status == PZ_OK && found.found && options->segment.symmetry == PZ_SYMMETRY_AUTO && !options->mirror_sketch)
+        status = pl_sketch_symmetric_on(options, mesh, &found, &symmetric, ctx);
+    if (status != PZ_OK || !found.found || !symmetric) {
         pz_symmetry_clear(&found);
         return status;
     }

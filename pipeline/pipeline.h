@@ -129,6 +129,12 @@ typedef struct pz_run_options {
                                         sketch file: pz_run scales its offset with the mesh */
     const char *sketch_path;         /* seams the user drew: {"curves": [[[x,y,z], ...]]} in the mesh's units */
     const pz_sketch *sketch;         /* or the same in memory (millimetres); both may be given */
+    const pz_sketch *garment_seams;  /* the garment's own seams (millimetres; may be NULL), kept as seams like the
+                                        sketch but not the designer's: no part in its symmetry (the studio passes
+                                        the seams its one preparation welded) */
+    int mirror_sketch;               /* 1: each stroke is also drawn mirrored about the garment's plane, when one
+                                        is found, so the pattern stays symmetric; 0 (default): a sketch that is
+                                        not symmetric lays the garment out without the plane (docs/run.md) */
     const char *grain_hints_path;    /* grain hints: {"curves": [[[x,y,z], ...]]} in the mesh's units, each a short
                                         stroke along which the warp runs in the piece it lies on (docs/run.md) */
     const pz_sketch *grain_hints;    /* or the same in memory (millimetres); both may be given */
@@ -332,6 +338,8 @@ typedef struct pz_result {
     double symmetrized_max_mm;       /* the input's vertices' distance to it: largest, 95th percentile (-1) */
     double symmetrized_p95_mm;
     int symmetry_rejected;           /* the joint flattening rejected the mirrored layout: made without the plane */
+    int symmetry_sketch_asymmetric;  /* the plane was found and not used: the designer's sketch is not symmetric
+                                        about it (options.mirror_sketch mirrors it) */
     int32_t pieces_with_symmetry, pieces_without_symmetry;
     int32_t mirror_pieces;           /* mirror pairs and panels crossed by the plane in the final layout */
     int32_t exact_mirror_pieces;     /* those made exact mirror images (docs/segment.md, "Exact mirror pieces") */

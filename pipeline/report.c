@@ -562,6 +562,7 @@ static int extend_symmetry(const pz_result *result, cJSON *object)
     int ok = cJSON_AddBoolToObject(symmetry, "found", plane->found) != NULL;
     ok &= cJSON_AddBoolToObject(symmetry, "used", used) != NULL;
     ok &= cJSON_AddBoolToObject(symmetry, "rejected_by_verdict", result->symmetry_rejected) != NULL;
+    ok &= cJSON_AddBoolToObject(symmetry, "sketch_not_symmetric", result->symmetry_sketch_asymmetric) != NULL;
     ok &= cJSON_AddStringToObject(symmetry, "axis", !plane->found ? "none"
                                                      : plane->axis >= 0 && plane->axis < 3 ? axes[plane->axis]
                                                                                            : "oblique") != NULL;
@@ -614,6 +615,7 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
     }
     ok &= add_plain_number(object, "vetoed_panels", result->vetoed_panels);
     ok &= cJSON_AddBoolToObject(object, "consolidate", result->options.consolidate) != NULL;
+    ok &= cJSON_AddBoolToObject(object, "mirror_sketch", result->options.mirror_sketch) != NULL;
     if (result->consolidated_from > 0) /* the first layout's pieces, before consolidation (docs/run.md) */
         ok &= add_plain_number(object, "consolidated_from", result->consolidated_from);
     /* Monotone panel counts: the looser settings laid out first, their cuts kept (docs/segment.md). */

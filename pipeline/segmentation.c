@@ -95,6 +95,7 @@ struct pl_segmenter {
     const pz_sketch *grain_hints;       /* the designer's grain hints (pl_segmenter_give_grain_hints), or NULL */
     pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
     int plane;                          /* 1: a plane was found or given (each goal setting decides its use) */
+    int sketch_asymmetric;              /* 1: a plane was found, not used: the designer's sketch is not symmetric */
     int32_t mirror_pieces, exact_mirror_pieces; /* of the last flattening (pl_segmenter_exact_mirrors) */
     /* Monotone panel counts (ladder_cuts): the looser settings' final cuts, seeded into this run's layout. */
     int ladder_done;                    /* 1: the layout and its verdict rounds were made by solve_setting */
@@ -239,9 +240,10 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
 
 /*
  * The mirror plane, once, before the field: found (AUTO, within its
- * tolerance) or given (an axis, or the user's plane in the input's units),
- * and the field symmetrized about it (pz_field_mirrored) for the layouts made
- * with it. The plain field stays for the layout without it.
+ * tolerance) or given (an axis, or the user's plane in the input's units);
+ * a found plane is not used when the designer's sketch is not symmetric
+ * about it. The field is then symmetrized about it (pz_field_mirrored) for
+ * the layouts made with it; the plain field stays for the layout without it.
  */
 static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_topology *topology, pz_ctx *ctx)
 {
@@ -249,18 +251,27 @@ static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_
     double plane[4];
     memcpy(plane, given->symmetry_plane, sizeof plane);
     plane[3] *= garment->unit_scale; /* the user's plane is in the input's units, the garment in millimetres */
+    pz_symmetry_clear(&seg->symmetry);
     pz_status status = seg->given_plane && seg->given_plane->vertex_count == garment->vertex_count
                            ? pz_symmetry_copy(seg->given_plane, &seg->symmetry, ctx)
                            : pz_symmetry_detect(garment, topology, given->symmetry, plane, 0, &seg->symmetry, ctx);
     seg->plane = status == PZ_OK && seg->symmetry.found;
-    if (status == PZ_OK && seg->symmetry.found)
-        status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
-                                   &seg->mirror_field, ctx);
     if (status == PZ_OK && given->symmetry != PZ_SYMMETRY_OFF)
         pz_note(ctx, "run: symmetry: %s plane (%.4f, %.4f, %.4f) . p = %.2f mm, the garment within %.2f mm of its "
                 "mirror image (%.2f %% of its diagonal)", seg->symmetry.found ? "" : "no good enough",
                 seg->symmetry.normal[0], seg->symmetry.normal[1], seg->symmetry.normal[2], seg->symmetry.offset,
                 seg->symmetry.residual_mm, 100 * seg->symmetry.residual_rel);
+    /* A found plane is the garment's, not the designer's: strokes on one side only ask for a pattern that is
+     * not symmetric, which a layout made on one half cannot give (docs/run.md, "Sketches and symmetry"). */
+    int symmetric = 1;
+    if (status == PZ_OK && seg->plane && given->symmetry == PZ_SYMMETRY_AUTO && !seg->options->mirror_sketch)
+        status = pl_sketch_symmetric_on(seg->options, garment, &seg->symmetry, &symmetric, ctx);
+    if (status == PZ_OK && !symmetric) {
+        seg->plane = 0;
+        seg->sketch_asymmetric = 1;
+        pz_note(ctx, "run: symmetry: the sketch is not symmetric about the plane: laid out without it (mirror the "
+                "sketch, --mirror-sketch, for a symmetric pattern)");
+    }
     return status;
 }
 
@@ -557,8 +568,13 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
     pz_topology *topology = NULL;
     pz_sketch *sketch = NULL;
     pz_status status = pz_topology_build(garment, &topology, ctx);
+    /* The plane before the sketch: mirrored strokes (mirror_sketch) join it, and strokes on one side only
+     * leave the plane unused. */
+    if (status == PZ_OK && !seg->field)
+        status = find_plane(seg, garment, topology, ctx);
     if (status == PZ_OK)
-        status = pl_gather_sketch(seg->options, seg->prepared, garment, &sketch, ctx);
+        status = pl_gather_sketch(seg->options, seg->prepared, garment, seg->plane ? &seg->symmetry : NULL, &sketch,
+                                  ctx);
     /* Before the long work: can S be met with sound pieces at all? (One line when it cannot.) */
     if (status == PZ_OK && !seg->outlook.measured)
         status = pl_strain_outlook(garment, seg->options, seg->grain, &seg->outlook, ctx);
@@ -575,8 +591,9 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         if (status == PZ_OK)
             status = pz_field_compute(garment, topology, &options, &seg->field, ctx);
         pz_sketch_free(&aligned);
-        if (status == PZ_OK)
-            status = find_plane(seg, garment, topology, ctx);
+        if (status == PZ_OK && seg->plane) /* the layouts made with the plane follow the field symmetrized about it */
+            status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
+                                       &seg->mirror_field, ctx);
         seg->field_ms = pz_elapsed_ms(start, pz_seconds());
         if (status == PZ_OK)
             pz_note(ctx, "run: field: %.0f ms, %d singularities", seg->field_ms,
@@ -1182,6 +1199,7 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->symmetry.vertex_mirror = NULL, result->symmetry.vertex_side = NULL, result->symmetry.face_mirror = NULL;
     result->symmetry_used = seg->plane && seg->goals.symmetry_used;
     result->symmetry_rejected = seg->goals.plane_dropped != 0;
+    result->symmetry_sketch_asymmetric = seg->sketch_asymmetric;
     result->pieces_with_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_with : -1;
     result->pieces_without_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_without : -1;
     result->mirror_pieces = seg->mirror_pieces;

@@ -11,6 +11,9 @@
  */
 #include "pipeline/internal.h"
 
+#include "core/vec.h"
+
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -83,20 +86,35 @@ static pz_status read_checked(const pz_sketch *given, const char *name, const ch
     return status;
 }
 
-pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_result *prepared, const pz_mesh *mesh,
-                           pz_sketch **out, pz_ctx *ctx)
+pz_status pl_designer_sketch(const pz_run_options *options, const pz_mesh *mesh, pz_sketch **out, pz_ctx *ctx)
 {
     *out = NULL;
     pz_sketch *from_file = NULL;
     pz_status status = read_checked(options->sketch, "sketch", options->sketch_path, mesh, &from_file, ctx);
+    if (status == PZ_OK)
+        status = pl_sketch_join(options->sketch, from_file, out, ctx);
+    pz_sketch_free(&from_file);
+    return status;
+}
+
+pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_result *prepared, const pz_mesh *mesh,
+                           const pz_symmetry *plane, pz_sketch **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    pz_sketch *designer = NULL;
+    pz_status status = pl_designer_sketch(options, mesh, &designer, ctx);
+    if (status == PZ_OK && designer && options->mirror_sketch && plane && plane->found)
+        status = pl_sketch_add_mirrors(designer, plane, pl_sketch_mirror_tolerance(mesh), ctx);
+    if (status == PZ_OK)
+        status = pz_sketch_check(options->garment_seams, mesh, "garment seams", ctx);
     if (status != PZ_OK) {
-        pz_sketch_free(&from_file);
+        pz_sketch_free(&designer);
         return status;
     }
     pz_sketch *sketch = calloc(1, sizeof *sketch);
-    int ok = sketch && sketch_append(sketch, options->sketch) && sketch_append(sketch, from_file) &&
-             sketch_append_welded(sketch, prepared, mesh);
-    pz_sketch_free(&from_file);
+    int ok = sketch && sketch_reserve(sketch, 0, 0) && sketch_append(sketch, designer) &&
+             sketch_append(sketch, options->garment_seams) && sketch_append_welded(sketch, prepared, mesh);
+    pz_sketch_free(&designer);
     if (!ok) {
         pz_sketch_free(&sketch);
         return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory gathering sketches");
@@ -104,6 +122,198 @@ pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_resul
     if (sketch->curve_count == 0)
         pz_sketch_free(&sketch);
     *out = sketch;
+    return PZ_OK;
+}
+
+/* ---------------------------------------------------------------- symmetry of the strokes */
+
+/* The most points a sketch is sampled at to compare it with its mirror image: the cost stays bounded whatever
+ * the file (1000 curves of any length). */
+#define MIRROR_SAMPLES_MAX 20000
+/* A stroke is its own or another stroke's mirror image when this share of its samples, mirrored, lies within
+ * the tolerance of the sketch (the ends of hand-drawn strokes differ). */
+#define MIRROR_SHARE 0.9
+
+double pl_sketch_mirror_tolerance(const pz_mesh *mesh)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int32_t v = 0; v < mesh->vertex_count; ++v)
+        for (int d = 0; d < 3; ++d) {
+            lo[d] = fmin(lo[d], mesh->positions[3 * (size_t)v + d]);
+            hi[d] = fmax(hi[d], mesh->positions[3 * (size_t)v + d]);
+        }
+    double diagonal = mesh->vertex_count > 0 ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                                                    (hi[2] - lo[2]) * (hi[2] - lo[2]))
+                                             : 0;
+    /* Strokes snapped to vertices by hand or by a script zigzag by up to an edge either side: two edges apart is
+     * still the same line on a coarse mesh. */
+    double edge_sum = 0;
+    for (int32_t f = 0; f < mesh->face_count; ++f)
+        for (int k = 0; k < 3; ++k)
+            edge_sum += pz_vec3_distance(mesh->positions + 3 * (size_t)mesh->faces[3 * (size_t)f + k],
+                                         mesh->positions + 3 * (size_t)mesh->faces[3 * (size_t)f + (k + 1) % 3]);
+    double mean_edge = mesh->face_count > 0 ? edge_sum / (3.0 * mesh->face_count) : 0;
+    return fmax(fmax(PZ_SKETCH_TOLERANCE_REL * diagonal, 10.0), 2 * mean_edge);
+}
+
+typedef struct mirror_sample {
+    int64_t cell;   /* the grid cell's key */
+    double p[3];
+    int32_t curve;
+} mirror_sample;
+
+static int64_t cell_key(const double p[3], double cell)
+{
+    int64_t key = 0;
+    for (int d = 0; d < 3; ++d) {
+        double c = floor(p[d] / cell);
+        c = fmax(fmin(c, 1e6), -1e6); /* far points share the border cells: a slower search, never a wrong one */
+        key = key * 4194304 + ((int64_t)c + 2097152);
+    }
+    return key;
+}
+
+static int by_cell(const void *a, const void *b)
+{
+    int64_t x = ((const mirror_sample *)a)->cell, y = ((const mirror_sample *)b)->cell;
+    return (x > y) - (x < y);
+}
+
+/* The sketch's samples about `step` apart (at most MIRROR_SAMPLES_MAX in all), sorted by cell; NULL when out of
+ * memory. */
+static mirror_sample *sample_sketch(const pz_sketch *sketch, double tolerance, int32_t *count)
+{
+    double length = 0;
+    int32_t segments = 0;
+    for (int32_t c = 0; c < sketch->curve_count; ++c)
+        for (int32_t i = sketch->curve_offsets[c]; i + 1 < sketch->curve_offsets[c + 1]; ++i, ++segments)
+            length += pz_vec3_distance(sketch->points + 3 * (size_t)i, sketch->points + 3 * (size_t)i + 3);
+    double step = fmax(0.5 * tolerance, length / (MIRROR_SAMPLES_MAX - segments - 1 > 0 ? MIRROR_SAMPLES_MAX - segments - 1 : 1));
+    size_t capacity = (size_t)(length / step) + (size_t)segments + 2;
+    mirror_sample *samples = malloc(capacity * sizeof *samples);
+    if (!samples)
+        return NULL;
+    size_t n = 0;
+    for (int32_t c = 0; c < sketch->curve_count; ++c)
+        for (int32_t i = sketch->curve_offsets[c]; i + 1 < sketch->curve_offsets[c + 1]; ++i) {
+            const double *a = sketch->points + 3 * (size_t)i, *b = a + 3;
+            int32_t pieces = (int32_t)fmin(ceil(pz_vec3_distance(a, b) / step), 1e6);
+            if (pieces < 1)
+                pieces = 1;
+            for (int32_t k = 0; k < pieces && n < capacity; ++k, ++n) {
+                double t = (double)k / pieces;
+                for (int d = 0; d < 3; ++d)
+                    samples[n].p[d] = a[d] + t * (b[d] - a[d]);
+                samples[n].curve = c;
+            }
+        }
+    for (size_t i = 0; i < n; ++i)
+        samples[i].cell = cell_key(samples[i].p, tolerance);
+    qsort(samples, n, sizeof *samples, by_cell);
+    *count = (int32_t)n;
+    return samples;
+}
+
+/* 1 when some sample lies within `tolerance` of p (the 27 cells around it). */
+static int near_sample(const mirror_sample *samples, int32_t count, const double p[3], double tolerance)
+{
+    for (int dx = -1; dx <= 1; ++dx)
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dz = -1; dz <= 1; ++dz) {
+                double q[3] = {p[0] + dx * tolerance, p[1] + dy * tolerance, p[2] + dz * tolerance};
+                int64_t key = cell_key(q, tolerance);
+                int32_t lo = 0, hi = count;
+                while (lo < hi) { /* the first sample of the cell */
+                    int32_t mid = lo + (hi - lo) / 2;
+                    if (samples[mid].cell < key)
+                        lo = mid + 1;
+                    else
+                        hi = mid;
+                }
+                for (int32_t i = lo; i < count && samples[i].cell == key; ++i)
+                    if (pz_vec3_distance(samples[i].p, p) <= tolerance)
+                        return 1;
+            }
+    return 0;
+}
+
+/* Per curve of the sketch: 1 when MIRROR_SHARE of its samples, mirrored, lie near the sketch (mirrored[c]). */
+static int curves_mirrored(const pz_sketch *sketch, const pz_symmetry *plane, double tolerance, uint8_t *mirrored)
+{
+    int32_t count = 0;
+    mirror_sample *samples = sample_sketch(sketch, tolerance, &count);
+    int32_t *matched = calloc((size_t)sketch->curve_count + 1, sizeof(int32_t));
+    int32_t *total = calloc((size_t)sketch->curve_count + 1, sizeof(int32_t));
+    if (!samples || !matched || !total) {
+        free(samples), free(matched), free(total);
+        return 0;
+    }
+    for (int32_t i = 0; i < count; ++i) {
+        double image[3];
+        pz_symmetry_reflect_point(plane, samples[i].p, image);
+        ++total[samples[i].curve];
+        matched[samples[i].curve] += near_sample(samples, count, image, tolerance);
+    }
+    for (int32_t c = 0; c < sketch->curve_count; ++c)
+        mirrored[c] = matched[c] >= MIRROR_SHARE * total[c];
+    free(samples), free(matched), free(total);
+    return 1;
+}
+
+pz_status pl_sketch_symmetric(const pz_sketch *sketch, const pz_symmetry *plane, double tolerance, int *symmetric,
+                              pz_ctx *ctx)
+{
+    *symmetric = 1;
+    if (!sketch || sketch->curve_count == 0 || !plane || !plane->found)
+        return PZ_OK;
+    uint8_t *mirrored = malloc((size_t)sketch->curve_count);
+    if (!mirrored || !curves_mirrored(sketch, plane, tolerance, mirrored)) {
+        free(mirrored);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory comparing the sketch with its mirror image");
+    }
+    for (int32_t c = 0; c < sketch->curve_count; ++c)
+        *symmetric &= mirrored[c];
+    free(mirrored);
+    return PZ_OK;
+}
+
+pz_status pl_sketch_symmetric_on(const pz_run_options *options, const pz_mesh *mesh, const pz_symmetry *plane,
+                                 int *symmetric, pz_ctx *ctx)
+{
+    *symmetric = 1;
+    pz_sketch *designer = NULL;
+    pz_status status = pl_designer_sketch(options, mesh, &designer, ctx);
+    if (status == PZ_OK)
+        status = pl_sketch_symmetric(designer, plane, pl_sketch_mirror_tolerance(mesh), symmetric, ctx);
+    pz_sketch_free(&designer);
+    return status;
+}
+
+pz_status pl_sketch_add_mirrors(pz_sketch *sketch, const pz_symmetry *plane, double tolerance, pz_ctx *ctx)
+{
+    int32_t count = sketch->curve_count;
+    uint8_t *mirrored = malloc((size_t)count + 1);
+    if (!mirrored || !curves_mirrored(sketch, plane, tolerance, mirrored)) {
+        free(mirrored);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory mirroring the sketch");
+    }
+    int32_t added_curves = 0, added_points = 0;
+    for (int32_t c = 0; c < count; ++c)
+        if (!mirrored[c])
+            ++added_curves, added_points += sketch->curve_offsets[c + 1] - sketch->curve_offsets[c];
+    if (added_curves > 0 && !sketch_reserve(sketch, added_curves, added_points)) {
+        free(mirrored);
+        return pz_error(ctx, PZ_ERR_NOMEM, "run: out of memory mirroring the sketch");
+    }
+    for (int32_t c = 0; c < count; ++c) {
+        if (mirrored[c])
+            continue;
+        int32_t at = sketch->curve_offsets[sketch->curve_count];
+        for (int32_t i = sketch->curve_offsets[c]; i < sketch->curve_offsets[c + 1]; ++i, ++at)
+            pz_symmetry_reflect_point(plane, sketch->points + 3 * (size_t)i, sketch->points + 3 * (size_t)at);
+        sketch->curve_offsets[++sketch->curve_count] = at;
+    }
+    free(mirrored);
     return PZ_OK;
 }
 

@@ -100,6 +100,7 @@ static studio_output *make_output(pz_studio *studio, pz_result *result, int run_
     snprintf(output->name, sizeof output->name, "%s", result->options.name ? result->options.name : "garment");
     result->options.name = output->name;
     result->options.sketch = NULL; /* the job's, freed by the next run */
+    result->options.garment_seams = NULL;
     result->options.grain_hints = NULL;
     output->json = studio_result_json(result, run_id, ms, &output->json_length);
     if (!output->json) {

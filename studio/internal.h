@@ -72,7 +72,7 @@ typedef struct studio_garment {
     char name[256];                 /* the file's base name */
     pz_mesh *mesh;                  /* as loaded, in millimetres, prepared (pz_prepare_auto) once; read by the
                                        runs (which do not prepare again), freed after them */
-    pz_sketch *welded;              /* the seams the preparation welded, added to every run's strokes, or NULL */
+    pz_sketch *welded;              /* the seams the preparation welded, every run's garment_seams, or NULL */
     double mean_edge_mm;
     char *mesh_json;                /* {"positions": [...], "faces": [...]} of mesh */
     long last_used;
@@ -128,8 +128,8 @@ char *studio_garments_list_json(pz_studio *studio);
 /* ---------------------------------------------------------------- request.c */
 
 /* The run request's JSON into *options (from pz_run_options_default; no preparation: the garment's was
- * done once) and *sketch (the strokes, then the curves of `welded` (may be NULL); NULL when neither has
- * any): unknown keys, wrong types, values out of range, too many or too long strokes, points not finite or
+ * done once; options->garment_seams = `welded`, the garment's, may be NULL) and *sketch (the strokes; NULL
+ * when there are none): unknown keys, wrong types, values out of range, too many or too long strokes, points not finite or
  * far from the garment (bbox of `mesh` grown by its diagonal) are PZ_ERR_USAGE with a message. */
 pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh, const pz_sketch *welded,
                            pz_run_options *options, pz_sketch **sketch, pz_sketch **grain, pz_ctx *ctx);

@@ -180,31 +180,6 @@ static pz_status read_strokes(const cJSON *item, const char *name, const pz_mesh
     return status;
 }
 
-/* *sketch (may be NULL: none) followed by the curves of `welded` (may be NULL), into a new *sketch. */
-static pz_status append_welded(pz_sketch **sketch, const pz_sketch *welded, pz_ctx *ctx)
-{
-    if (!welded || welded->curve_count == 0)
-        return PZ_OK;
-    const pz_sketch *first = *sketch;
-    int32_t first_curves = first ? first->curve_count : 0, first_points = first ? first->curve_offsets[first_curves] : 0;
-    int32_t curves = first_curves + welded->curve_count, points = first_points + welded->curve_offsets[welded->curve_count];
-    pz_sketch *joined = NULL;
-    pz_status status = studio_sketch_new(curves, points, &joined, ctx);
-    if (status != PZ_OK)
-        return status;
-    if (first) {
-        memcpy(joined->curve_offsets, first->curve_offsets, (size_t)first_curves * sizeof(int32_t));
-        memcpy(joined->points, first->points, (size_t)first_points * 3 * sizeof(double));
-    }
-    for (int32_t i = 0; i <= welded->curve_count; ++i)
-        joined->curve_offsets[first_curves + i] = first_points + welded->curve_offsets[i];
-    memcpy(joined->points + 3 * (size_t)first_points, welded->points,
-           (size_t)welded->curve_offsets[welded->curve_count] * 3 * sizeof(double));
-    pz_sketch_free(sketch);
-    *sketch = joined;
-    return PZ_OK;
-}
-
 /* One member of the run request into options, sketch (seam strokes) or grain (grain strokes). */
 static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_options *options, pz_sketch **sketch,
                              pz_sketch **grain, pz_ctx *ctx)
@@ -230,6 +205,10 @@ static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_opti
         if (!cJSON_IsBool(item))
             return pz_error(ctx, PZ_ERR_USAGE, "consolidate: expected true or false");
         options->consolidate = cJSON_IsTrue(item);
+    } else if (strcmp(key, "mirror_sketch") == 0) {
+        if (!cJSON_IsBool(item))
+            return pz_error(ctx, PZ_ERR_USAGE, "mirror_sketch: expected true or false");
+        options->mirror_sketch = cJSON_IsTrue(item);
     } else if (strcmp(key, "symmetry") == 0)
         status = read_symmetry(item, &options->segment, ctx);
     else if (strcmp(key, "fabric") == 0)
@@ -240,7 +219,7 @@ static pz_status read_member(const cJSON *item, const pz_mesh *mesh, pz_run_opti
         status = read_strokes(item, "grain_strokes", mesh, grain, ctx);
     else
         status = pz_error(ctx, PZ_ERR_USAGE, "%s: not an option (max_strain, max_corners, max_pieces, darts, "
-                          "consolidate, symmetry, fabric, strokes, grain_strokes)", key);
+                          "consolidate, mirror_sketch, symmetry, fabric, strokes, grain_strokes)", key);
     return status;
 }
 
@@ -264,14 +243,13 @@ pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh,
     }
     cJSON_Delete(root);
     if (status == PZ_OK)
-        status = append_welded(sketch, welded, ctx);
-    if (status == PZ_OK)
         status = pz_run_options_check(options, "run", PZ_OPTION_KEYWORD, ctx);
     if (status != PZ_OK) {
         pz_sketch_free(sketch);
         pz_sketch_free(grain);
     }
     options->sketch = *sketch;
+    options->garment_seams = welded; /* the garment's own seams: kept, and no part of the sketch's symmetry */
     options->grain_hints = *grain;
     return status;
 }

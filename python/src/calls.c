@@ -550,7 +550,7 @@ done:
 const char pzpy_run_doc[] =
     "run(vertices, faces, *, poses=None, units=None, max_strain=0.05, max_corners=8, max_seam_mismatch=0.005, "
     "min_piece_width=40, min_piece_area=0.01, min_dart_intake=6, strict=False, symmetry='auto', fold=False, "
-    "darts=True, truing=True, consolidate=True, sketch=None, sketches=None, panels=None, prepare='auto', grain=None, grain_hints=None, "
+    "darts=True, truing=True, consolidate=True, sketch=None, sketches=None, mirror_sketch=False, panels=None, prepare='auto', grain=None, grain_hints=None, "
     "backend='textile', iterations=20, weights=(5, 1, 5, 5), fabric=None, scheme=None, relax=None, features=None, "
     "seam_allowance=10, hem_allowance=None, allowances=None, notch_spacing=100, paper='a4', dxf_strict=False, "
     "fabric_width=1500, gap=5, size='base', repair=False, name=None, progress=None, cancel=None)\n--\n\n"

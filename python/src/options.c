@@ -384,6 +384,9 @@ static int run_only_options(PyObject *kwargs, pz_run_options *options, pzpy_keep
         return -1;
     if (!(value = pzpy_pop(kwargs, "consolidate", keep)) || flag(value, "consolidate", &options->consolidate) < 0)
         return -1;
+    if (!(value = pzpy_pop(kwargs, "mirror_sketch", keep)) ||
+        flag(value, "mirror_sketch", &options->mirror_sketch) < 0)
+        return -1;
     if (!(value = pzpy_pop(kwargs, "sketch", keep)) || pzpy_path(value, "sketch", keep, &options->sketch_path) < 0)
         return -1;
     return 0;

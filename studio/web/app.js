@@ -277,6 +277,7 @@ function runOptions(consolidate) {
     max_pieces: Number($('max-pieces').value),
     darts: $('darts').checked,
     symmetry: $('symmetry').value,
+    mirror_sketch: $('mirror-sketch').checked,
     strokes: state.strokes.map((stroke) => stroke.points),
     grain_strokes: state.grainStrokes.map((stroke) => stroke.points),
   };
@@ -490,7 +491,7 @@ $('upload').addEventListener('change', async () => {
 });
 $('run').addEventListener('click', startRun);
 $('cancel').addEventListener('click', () => api('POST', `/api/garments/${state.garment.id}/cancel`, {}));
-for (const id of ['max-strain', 'max-corners', 'max-pieces', 'darts', 'consolidate', 'symmetry', 'fabric'])
+for (const id of ['max-strain', 'max-corners', 'max-pieces', 'darts', 'consolidate', 'mirror-sketch', 'symmetry', 'fabric'])
   $(id).addEventListener('change', startRun);
 for (const mode of ['orbit', 'draw', 'grain', 'erase']) $(`mode-${mode}`).addEventListener('click', () => setMode(mode));
 

@@ -275,6 +275,62 @@ expect_ok "run bodice --truing off"
 check "run --sketch: $(panel_count sketched/report.json) pieces, more than 2 above the $(panel_count bodice-untrued/report.json) without" \
     [ "$(panel_count sketched/report.json)" -le $(($(panel_count bodice-untrued/report.json) + 2)) ]
 
+# A sketch on one side of a symmetric garment asks for a pattern that is not symmetric: the plane is found
+# and not used (a layout made on one half cannot honour it), and report.json says why (docs/run.md,
+# "Sketches and symmetry").
+report_checks "run --sketch (one side)" sketched \
+    "the plane used, or not said, though the sketch is on one side" \
+    "d['segmentation']['symmetry']['found'] and not d['segmentation']['symmetry']['used'] and d['segmentation']['symmetry']['sketch_not_symmetric'] and not d['segmentation']['mirror_sketch']"
+# --mirror-sketch: the stroke's mirror image is drawn too, so both are seams and the sketch no reason to
+# drop the plane.
+cat >mirrored.py <<'PY'
+import json, math, sys
+vs = [tuple(map(float, l.split()[1:4])) for l in open('bodice.obj') if l.startswith('v ')]
+fs = [[int(t.split('/')[0]) - 1 for t in l.split()[1:4]] for l in open('bodice.obj') if l.startswith('f ')]
+edges = [math.dist(vs[f[k]], vs[f[(k + 1) % 3]]) for f in fs for k in range(3)]
+mean_edge = sum(edges) / len(edges)
+d = json.load(open(sys.argv[1] + '/report.json'))['segmentation']['symmetry']
+n, off = d['normal'], d['offset']
+points = json.load(open('sketch.json'))['curves'][0]
+layout = [tuple(map(float, l.split()[1:4])) for l in open(sys.argv[1] + '/layout.obj') if l.startswith('v ')]
+def near(p):
+    return min(math.dist(p, q) for q in layout) <= mean_edge
+def mirror(p):
+    t = 2 * (sum(a * b for a, b in zip(n, p)) - off)
+    return [a - t * b for a, b in zip(p, n)]
+hits = sum(near(p) for p in points)
+mirrored = sum(near(mirror(p)) for p in points)
+print('%d of %d sketch points and %d of their mirror images within a mean edge (%.1f mm) of a seam' %
+      (hits, len(points), mirrored, mean_edge))
+sys.exit(0 if hits == len(points) and mirrored == len(points) and len(points) >= 10 else 1)
+PY
+run run bodice.obj -o mirrored-sketch --sketch sketch.json --mirror-sketch --truing off --quiet
+expect_ok "run --sketch --mirror-sketch"
+check "run --mirror-sketch: the stroke and its mirror image are not both seams: $(python3 mirrored.py mirrored-sketch)" \
+    sh -c 'python3 mirrored.py mirrored-sketch >/dev/null'
+check "without --mirror-sketch the mirror image is no seam (the check can fail): $(python3 mirrored.py sketched)" \
+    sh -c '! python3 mirrored.py sketched >/dev/null'
+goal_checks "run --mirror-sketch" mirrored-sketch 0.05 8
+report_checks "run --mirror-sketch" mirrored-sketch \
+    "the sketch, mirrored, still counted as one-sided" \
+    "d['segmentation']['symmetry']['found'] and not d['segmentation']['symmetry']['sketch_not_symmetric'] and d['segmentation']['mirror_sketch']"
+# A sketch that is its own mirror image (a centre front line) leaves the plane to the layout.
+python3 - <<'PY'
+import json
+vs = [tuple(map(float, l.split()[1:4])) for l in open('bodice.obj') if l.startswith('v ')]
+top = max(v[2] for v in vs if v[1] > 0 and abs(v[0]) < 15)
+points = []
+for i in range(17):
+    best = min((v for v in vs if v[1] > 0), key=lambda v: v[0] ** 2 + (v[2] - top * i / 16) ** 2)
+    if list(best) not in points:
+        points.append(list(best))
+json.dump({'curves': [points]}, open('centre.json', 'w'))
+PY
+run run bodice.obj -o centre-sketch --sketch centre.json --quiet
+expect_ok "run --sketch (centre line)"
+report_checks "run --sketch (centre line)" centre-sketch \
+    "a centre line counted as one-sided" "d['segmentation']['symmetry']['found'] and not d['segmentation']['symmetry']['sketch_not_symmetric']"
+
 # --darts off: no dart anywhere, where darts on makes some (S = 0.045 without the mirror plane).
 run run bodice.obj -o darts --max-strain 0.045 --symmetry off --quiet
 expect_ok "run --max-strain 0.045 --symmetry off"
