@@ -167,8 +167,23 @@ static pz_status build_pieces(pz_result *result, pz_ctx *ctx)
     if (status == PZ_OK)
         status = pz_pieces_build(result->pattern, result->uv, options, result->panel_mirror,
                                  (const char *const *)result->panel_names, &result->pieces, ctx);
-    if (status == PZ_OK)
-        status = pz_marker_build(result->pieces, options, &result->marker, ctx);
+    if (status == PZ_OK && !result->options.defer_extras)
+        status = pz_result_complete(result, ctx);
+    return status;
+}
+
+pz_status pz_result_complete(pz_result *result, pz_ctx *ctx)
+{
+    if (!result)
+        return PZ_OK;
+    pz_status status = PZ_OK;
+    if (result->from_run && !result->tradeoff_measured) {
+        status = pl_measure_tradeoff(result, ctx);
+        result->tradeoff_measured = status == PZ_OK;
+    }
+    if (status != PZ_OK || result->marker || !result->pieces)
+        return status;
+    status = pz_marker_build(result->pieces, &result->options.output, &result->marker, ctx);
     for (int32_t i = 0; status == PZ_OK && i < result->marker->unplaced_count; ++i) {
         const pz_piece *piece = &result->pieces->pieces[result->marker->unplaced[i]];
         pz_note(ctx, "warning: marker: piece %s (%.0f mm wide) does not fit on a fabric %.0f mm wide: left out of "
@@ -435,14 +450,17 @@ static pz_status lay_out(const pz_mesh *mesh, const pz_panels *panels, const pz_
     return PZ_OK;
 }
 
-/* The rest of a run laid out (lay_out): the trade-off, mirror pieces, names, the pieces and the marker; the
+/* The rest of a run laid out (lay_out): the trade-off, mirror pieces, names, the pieces and the marker (the
+ * trade-off and the marker left to pz_result_complete with options.defer_extras); the
  * total time from `start`. The result stays the caller's (freed by it on error too). */
 static pz_status finish(pz_result *result, double start, pz_ctx *ctx)
 {
     int from_run = result->from_run;
     pz_status status = PZ_OK;
-    if (from_run)
+    if (from_run && !result->options.defer_extras) {
         status = pl_measure_tradeoff(result, ctx);
+        result->tradeoff_measured = status == PZ_OK;
+    }
     if (status == PZ_OK)
         status = find_mirror_panels(result, ctx);
     if (status == PZ_OK && from_run)

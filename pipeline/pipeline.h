@@ -132,6 +132,10 @@ typedef struct pz_run_options {
     const pz_sketch *garment_seams;  /* the garment's own seams (millimetres; may be NULL), kept as seams like the
                                         sketch but not the designer's: no part in its symmetry (the studio passes
                                         the seams its one preparation welded) */
+    int defer_extras;                /* 1: pz_run leaves the trade-off curve and the marker (the pieces nested on
+                                        the fabric; with the trade-off a fifth of a short run) to
+                                        pz_result_complete, which pz_result_write calls: for callers that look at
+                                        a result before they write it (the studio); 0 (default) */
     int mirror_sketch;               /* 1: each stroke is also drawn mirrored about the garment's plane, when one
                                         is found, so the pattern stays symmetric; 0 (default): a sketch that is
                                         not symmetric lays the garment out without the plane (docs/run.md) */
@@ -325,6 +329,7 @@ typedef struct pz_result {
                                         a budget of one fewer, and that pattern met every goal (docs/run.md,
                                         "Consolidation") */
     pz_strain_outlook outlook;       /* can S be met: taken before the segmentation */
+    int tradeoff_measured;           /* 1: pl_measure_tradeoff ran (or deferred extras were completed) */
     pz_segment_tradeoff tradeoff;    /* the final layout's merge sequence (count 0: not measured): the pieces each
                                         strain goal needs (pz_tradeoff_pieces; docs/run.md, "The trade-off") */
     double pattern_mirror_rms_mm;    /* mirror symmetry of the flattened pieces; -1 when not measured */
@@ -403,13 +408,21 @@ typedef enum pz_output_file {
 pz_status pz_outputs_parse(const char *list, unsigned *outputs, pz_ctx *ctx);
 
 /**
+ * What pz_run deferred (pz_run_options.defer_extras) made now: the trade-off curve (result->tradeoff) and
+ * the marker (result->marker, docs/marker.md); each at most once, PZ_OK at once when both are there (or do
+ * not apply). Not safe to call on one result from two threads at once (the caller locks).
+ */
+pz_status pz_result_complete(pz_result *result, pz_ctx *ctx);
+
+/**
  * Writes the chosen files of a result into `folder` as one unit: the files
  * are written and synced into a hidden folder beside it, with the marker
  * `.panelize` last, which then replaces `folder` whole (created when missing;
  * an earlier panelize output is exchanged atomically and its files removed;
  * a folder of other files is refused, see pz_output_folder_check). On failure
  * or cancellation the earlier folder is left as it was and nothing new stays
- * behind; writers into one parent take turns. Files that do not apply (layout.obj of pz_flatten, energy.svg of
+ * behind; writers into one parent take turns. What pz_run deferred is made first (pz_result_complete).
+ * Files that do not apply (layout.obj of pz_flatten, energy.svg of
  * another back-end) are skipped. *report_text (may be NULL) receives
  * report.json's text (malloc'd, the caller frees) when it was written.
  */

@@ -403,6 +403,9 @@ pz_status pz_result_write(pz_result *result, const char *folder, unsigned output
     memset(&w, 0, sizeof w);
     w.result = result;
     w.write_start = pz_seconds();
+    pz_status completed = pz_result_complete(result, ctx); /* what pz_run deferred (defer_extras) */
+    if (completed != PZ_OK)
+        return completed;
     fill_export_inputs(&w);
     list_outputs(&w, outputs);
     int energy_wanted = result->options.flatten.backend == PZ_BACKEND_SPRINGMASS && (outputs & PZ_OUTPUT_ENERGY_SVG);

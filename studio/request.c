@@ -231,6 +231,8 @@ pz_status studio_parse_run(const char *body, size_t length, const pz_mesh *mesh,
     pz_run_options_default(options);
     options->units = PZ_UNITS_MM; /* the studio's garments are in millimetres once loaded */
     options->prepare = 0;         /* and prepared once (garments.c) */
+    options->defer_extras = 1;    /* most runs are looked at, not written: the marker and the trade-off wait
+                                     for a download or the report */
     cJSON *root = NULL;
     pz_status status = parse_object(body, length, &root, ctx);
     for (const cJSON *item = root ? root->child : NULL; item && status == PZ_OK; item = item->next) {

@@ -355,7 +355,13 @@ static enum MHD_Result route_garment(pz_studio *studio, struct MHD_Connection *c
         studio_output *output = studio_output_get(studio, (int)id);
         if (!output)
             return answer_error(connection, MHD_HTTP_NOT_FOUND, "no result yet");
-        cJSON *report = pz_result_report(output->result); /* report.json's content */
+        pz_ctx ctx;
+        pz_ctx_init(&ctx);
+        ctx.quiet = 1;
+        pthread_mutex_lock(&output->write_lock); /* what the run deferred, as report.json has it */
+        pz_status status = pz_result_complete(output->result, &ctx);
+        cJSON *report = status == PZ_OK ? pz_result_report(output->result) : NULL; /* report.json's content */
+        pthread_mutex_unlock(&output->write_lock);
         char *text = report ? cJSON_PrintUnformatted(report) : NULL;
         cJSON_Delete(report);
         studio_output_release(studio, output);

@@ -324,6 +324,26 @@ static void test_write_outputs(void)
           ctx.error);
     rmdir(in_the_way);
     CHECK(count_entries(failing) == 0, "a failed write left files in %s", failing);
+    double length = result->marker ? result->marker->length_mm : -1;
+    int32_t tradeoff_count = result->tradeoff.count;
+    pz_result_free(&result);
+
+    /* Deferred extras (the studio's runs): no marker or trade-off after pz_run, the same ones made by the
+     * write. */
+    pz_run_options options;
+    pz_run_options_default(&options);
+    options.defer_extras = 1;
+    REQUIRE_OK(pz_run(mesh, &options, &result, &ctx), ctx);
+    CHECK(result->pieces && !result->marker && result->tradeoff.count == 0, "the marker or trade-off was made "
+          "though deferred");
+    test_temp_path(folder, sizeof folder, "deferred");
+    REQUIRE_OK(pz_result_write(result, folder, PZ_OUTPUT_ALL, NULL, &ctx), ctx);
+    CHECK(result->marker && file_exists(folder, "marker.svg"), "the write did not make the deferred marker");
+    CHECK(result->marker && fabs(result->marker->length_mm - length) < 1e-9, "the deferred marker is %.3f mm long, "
+          "the run's %.3f", result->marker ? result->marker->length_mm : -1, length);
+    CHECK(result->tradeoff.count == tradeoff_count && tradeoff_count > 0, "the deferred trade-off has %d steps, the "
+          "run's %d", (int)result->tradeoff.count, (int)tradeoff_count);
+    REQUIRE_OK(pz_result_complete(result, &ctx), ctx); /* made once: a second call keeps them */
     pz_result_free(&result);
     pz_mesh_free(&mesh);
 }

@@ -121,6 +121,9 @@ pieces=$(json "d['panel_count']")
 api GET "/api/garments/$id/report"
 check "report: $code" [ "$code" = 200 ]
 check "the report's panels are the result's" [ "$(json "d['summary']['panel_count']")" = "$pieces" ]
+# The run defers the marker and the trade-off (most runs are looked at, not written); the report makes them.
+check "the report has no marker" [ "$(json "d['marker']['efficiency'] > 0.3 and d['marker']['length_mm'] > 0")" = True ]
+check "the report has no trade-off" [ "$(json "len(d['tradeoff_sequence']) > 0 and len(d['tradeoff']) > 0")" = True ]
 check "the report names the garment" grep -q '"bodice' "$WORK/body"
 
 # A run long enough to be cancelled on a loaded machine (S = 0.01: about 3 s quiet; the defaults' 0.5 s run
