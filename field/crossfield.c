@@ -530,6 +530,41 @@ static pz_field *field_allocate(int32_t face_count)
     return field;
 }
 
+pz_status pz_field_copy(const pz_field *field, pz_field **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    if (!field)
+        return pz_error(ctx, PZ_ERR_USAGE, "field: nothing to copy");
+    pz_field *copy = field_allocate(field->face_count);
+    size_t n = (size_t)field->face_count, singular = (size_t)field->singularity_count;
+    if (copy) {
+        double *directions = copy->directions, *normals = copy->normals, *curvature = copy->curvature_directions;
+        double *anisotropy = copy->anisotropy, *constraint_directions = copy->constraint_directions;
+        uint8_t *constraint = copy->constraint;
+        *copy = *field; /* the figures; the arrays are this copy's own */
+        copy->directions = directions, copy->normals = normals, copy->curvature_directions = curvature;
+        copy->anisotropy = anisotropy, copy->constraint = constraint, copy->constraint_directions = constraint_directions;
+        copy->singular_vertices = malloc(singular * sizeof(int32_t) + 1);
+        copy->singular_indices = malloc(singular * sizeof(double) + 1);
+        if (!copy->singular_vertices || !copy->singular_indices)
+            pz_field_free(&copy);
+    }
+    if (!copy)
+        return pz_error(ctx, PZ_ERR_NOMEM, "field: out of memory copying a field of %d faces", (int)n);
+    memcpy(copy->directions, field->directions, 3 * n * sizeof(double));
+    memcpy(copy->normals, field->normals, 3 * n * sizeof(double));
+    memcpy(copy->curvature_directions, field->curvature_directions, 3 * n * sizeof(double));
+    memcpy(copy->anisotropy, field->anisotropy, n * sizeof(double));
+    memcpy(copy->constraint, field->constraint, n);
+    memcpy(copy->constraint_directions, field->constraint_directions, 3 * n * sizeof(double));
+    if (singular > 0) {
+        memcpy(copy->singular_vertices, field->singular_vertices, singular * sizeof(int32_t));
+        memcpy(copy->singular_indices, field->singular_indices, singular * sizeof(double));
+    }
+    *out = copy;
+    return PZ_OK;
+}
+
 /* Sketch constraints into field->constraint / constraint_directions. */
 static pz_status apply_sketch(const pz_mesh *mesh, const field_frames *fr, const pz_sketch *sketch, pz_field *field,
                               pz_ctx *ctx)

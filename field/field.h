@@ -171,6 +171,8 @@ typedef struct pz_field {
 pz_status pz_field_compute(const pz_mesh *mesh, const pz_topology *topology, const pz_field_options *options,
                            pz_field **out, pz_ctx *ctx);
 void pz_field_free(pz_field **field);
+/** A deep copy of a field into *out (the caller frees it with pz_field_free); PZ_ERR_NOMEM. */
+pz_status pz_field_copy(const pz_field *field, pz_field **out, pz_ctx *ctx);
 
 /**
  * The mirror-symmetric version of a field (docs/field.md, "Symmetry"), into

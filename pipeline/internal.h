@@ -177,6 +177,33 @@ pz_status pl_sketch_symmetric_on(const pz_run_options *options, const pz_mesh *m
 /** Appends the mirror image through `plane` of every curve of `sketch` that has none (the test above). */
 pz_status pl_sketch_add_mirrors(pz_sketch *sketch, const pz_symmetry *plane, double tolerance, pz_ctx *ctx);
 
+/* ---------------------------------------------------------------- run_cache.c */
+
+/** The mirror plane found before the field and the cross-field (with its mirrored version): what a run
+ * leaves for the next run of the same garment, sketch and options (pz_run_cache). */
+typedef struct pl_plane_and_field {
+    pz_symmetry symmetry;     /* the plane (found or given) with its maps; found = 0 without one */
+    int plane;                /* 1: the layouts may use it (found, and not refused for a one-sided sketch) */
+    int sketch_asymmetric;    /* found and refused: the designer's sketch is not symmetric about it */
+    pz_field *field;          /* the cross-field of the garment */
+    pz_field *mirror_field;   /* the field symmetrized about the plane, or NULL */
+    double field_ms;          /* what computing them took */
+} pl_plane_and_field;
+
+void pl_plane_and_field_clear(pl_plane_and_field *value);
+
+/** *key: a hash of everything the plane and field depend on (the garment's positions, faces and poses, the
+ * field's and symmetry's options, the designer's sketch, the garment's and welded seams, the grain hints,
+ * a given plane's maps). Reads the sketch file again (its errors are the run's). */
+pz_status pl_plane_and_field_key(const pz_run_options *options, const pz_prepare_result *prepared,
+                                 const pz_sketch *grain_hints, const pz_symmetry *given_plane, const pz_mesh *garment,
+                                 uint64_t *key, pz_ctx *ctx);
+/** A copy of the entry of `key` into *out (cleared first by the caller) and *found = 1; *found = 0 when the cache
+ * (may be NULL) has none. PZ_ERR_NOMEM. */
+pz_status pl_run_cache_find(pz_run_cache *cache, uint64_t key, pl_plane_and_field *out, int *found, pz_ctx *ctx);
+/** A copy of `value` kept under `key` (the older of the two entries replaced); nothing without a cache. */
+pz_status pl_run_cache_keep(pz_run_cache *cache, uint64_t key, const pl_plane_and_field *value, pz_ctx *ctx);
+
 /** The automatic layout's state across verdict rounds (opaque). */
 typedef struct pl_segmenter pl_segmenter;
 

@@ -620,13 +620,26 @@ static pz_status consolidate(const pz_mesh *garment, pz_result **first, pz_ctx *
 pz_status pz_run(const pz_mesh *garment, const pz_run_options *options, pz_result **out, pz_ctx *ctx)
 {
     double start = pz_seconds();
-    pz_status status = lay_out(garment, options ? options->panels : NULL, options, 1, out, ctx);
+    pz_run_options local;
+    if (options)
+        local = *options;
+    else
+        pz_run_options_default(&local);
+    /* Without the caller's cache, one of the run's own: a consolidation trial lays the same garment out
+     * again with the same plane and field. */
+    pz_run_cache *own = local.cache || local.panels ? NULL : pz_run_cache_create();
+    if (own)
+        local.cache = own;
+    pz_status status = lay_out(garment, local.panels, &local, 1, out, ctx);
     if (status == PZ_OK)
         status = consolidate(garment, out, ctx);
     if (status == PZ_OK)
         status = finish(*out, start, ctx);
     if (status != PZ_OK)
         pz_result_free(out);
+    if (*out && own)
+        (*out)->options.cache = NULL; /* the run's own, freed here */
+    pz_run_cache_free(&own);
     return status;
 }
 

@@ -109,6 +109,21 @@ typedef struct pz_panels {
 } pz_panels;
 
 /** Every option of the pipeline, one nested block per stage. */
+/**
+ * What one run leaves for the next run of the same garment (docs/run.md, "Reuse between runs"): the mirror
+ * plane and the cross-field (with its mirrored version), found again only when something they depend on
+ * changed (the garment, its poses, the sketch, the grain hints, the field's or symmetry's options), so a
+ * run that changes S, C, darts, the piece budget or the fabric reuses them. Holds at most two garments'
+ * (a symmetric garment's and the garment as loaded). One run at a time per cache; the caller frees it.
+ * pz_run keeps one of its own for its consolidation trial when the options give none.
+ */
+typedef struct pz_run_cache pz_run_cache;
+/** A new, empty cache (NULL when out of memory). */
+pz_run_cache *pz_run_cache_create(void);
+void pz_run_cache_free(pz_run_cache **cache);
+/** How often runs found what they needed in the cache and how often they computed it (both 0 for NULL). */
+void pz_run_cache_counts(const pz_run_cache *cache, int64_t *hits, int64_t *misses);
+
 typedef struct pz_run_options {
     /* load: the mesh as read, in its file's units */
     pz_units units;                  /* the mesh's units; PZ_UNITS_AUTO (default) guesses */
@@ -132,6 +147,9 @@ typedef struct pz_run_options {
     const pz_sketch *garment_seams;  /* the garment's own seams (millimetres; may be NULL), kept as seams like the
                                         sketch but not the designer's: no part in its symmetry (the studio passes
                                         the seams its one preparation welded) */
+    pz_run_cache *cache;             /* what this run may reuse from the last run of the same garment and keeps
+                                        for the next (the plane and the cross-field), or NULL (docs/run.md,
+                                        "Reuse between runs"); one run at a time per cache */
     int defer_extras;                /* 1: pz_run leaves the trade-off curve and the marker (the pieces nested on
                                         the fabric; with the trade-off a fifth of a short run) to
                                         pz_result_complete, which pz_result_write calls: for callers that look at
@@ -343,6 +361,7 @@ typedef struct pz_result {
     double symmetrized_max_mm;       /* the input's vertices' distance to it: largest, 95th percentile (-1) */
     double symmetrized_p95_mm;
     int symmetry_rejected;           /* the joint flattening rejected the mirrored layout: made without the plane */
+    int field_reused;                /* 1: the plane and cross-field came from options.cache (a run before) */
     int symmetry_sketch_asymmetric;  /* the plane was found and not used: the designer's sketch is not symmetric
                                         about it (options.mirror_sketch mirrors it) */
     int32_t pieces_with_symmetry, pieces_without_symmetry;

@@ -616,6 +616,7 @@ static int extend_segmentation(const pz_result *result, cJSON *root)
     ok &= add_plain_number(object, "vetoed_panels", result->vetoed_panels);
     ok &= cJSON_AddBoolToObject(object, "consolidate", result->options.consolidate) != NULL;
     ok &= cJSON_AddBoolToObject(object, "mirror_sketch", result->options.mirror_sketch) != NULL;
+    ok &= cJSON_AddBoolToObject(object, "field_reused", result->field_reused) != NULL;
     if (result->consolidated_from > 0) /* the first layout's pieces, before consolidation (docs/run.md) */
         ok &= add_plain_number(object, "consolidated_from", result->consolidated_from);
     /* Monotone panel counts: the looser settings laid out first, their cuts kept (docs/segment.md). */

@@ -96,6 +96,8 @@ struct pl_segmenter {
     pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
     int plane;                          /* 1: a plane was found or given (each goal setting decides its use) */
     int sketch_asymmetric;              /* 1: a plane was found, not used: the designer's sketch is not symmetric */
+    uint64_t cache_key;                 /* the plane and field's key in options->cache (pl_plane_and_field_key) */
+    int field_reused;                   /* 1: the plane and field came from options->cache */
     int32_t mirror_pieces, exact_mirror_pieces; /* of the last flattening (pl_segmenter_exact_mirrors) */
     /* Monotone panel counts (ladder_cuts): the looser settings' final cuts, seeded into this run's layout. */
     int ladder_done;                    /* 1: the layout and its verdict rounds were made by solve_setting */
@@ -256,11 +258,6 @@ static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_
                            ? pz_symmetry_copy(seg->given_plane, &seg->symmetry, ctx)
                            : pz_symmetry_detect(garment, topology, given->symmetry, plane, 0, &seg->symmetry, ctx);
     seg->plane = status == PZ_OK && seg->symmetry.found;
-    if (status == PZ_OK && given->symmetry != PZ_SYMMETRY_OFF)
-        pz_note(ctx, "run: symmetry: %s plane (%.4f, %.4f, %.4f) . p = %.2f mm, the garment within %.2f mm of its "
-                "mirror image (%.2f %% of its diagonal)", seg->symmetry.found ? "" : "no good enough",
-                seg->symmetry.normal[0], seg->symmetry.normal[1], seg->symmetry.normal[2], seg->symmetry.offset,
-                seg->symmetry.residual_mm, 100 * seg->symmetry.residual_rel);
     /* A found plane is the garment's, not the designer's: strokes on one side only ask for a pattern that is
      * not symmetric, which a layout made on one half cannot give (docs/run.md, "Sketches and symmetry"). */
     int symmetric = 1;
@@ -269,10 +266,59 @@ static pz_status find_plane(pl_segmenter *seg, const pz_mesh *garment, const pz_
     if (status == PZ_OK && !symmetric) {
         seg->plane = 0;
         seg->sketch_asymmetric = 1;
-        pz_note(ctx, "run: symmetry: the sketch is not symmetric about the plane: laid out without it (mirror the "
-                "sketch, --mirror-sketch, for a symmetric pattern)");
     }
     return status;
+}
+
+/* The plane's notes (found or reused). */
+static void say_plane(const pl_segmenter *seg, pz_ctx *ctx)
+{
+    if (seg->options->segment.symmetry != PZ_SYMMETRY_OFF)
+        pz_note(ctx, "run: symmetry: %s plane (%.4f, %.4f, %.4f) . p = %.2f mm, the garment within %.2f mm of its "
+                "mirror image (%.2f %% of its diagonal)", seg->symmetry.found ? "" : "no good enough",
+                seg->symmetry.normal[0], seg->symmetry.normal[1], seg->symmetry.normal[2], seg->symmetry.offset,
+                seg->symmetry.residual_mm, 100 * seg->symmetry.residual_rel);
+    if (seg->sketch_asymmetric)
+        pz_note(ctx, "run: symmetry: the sketch is not symmetric about the plane: laid out without it (mirror the "
+                "sketch, --mirror-sketch, for a symmetric pattern)");
+}
+
+/* The plane and field the last run of this garment, sketch and options left in the run's cache (docs/run.md,
+ * "Reuse between runs"), taken when there: seg->field is then set. */
+static pz_status reuse_plane_and_field(pl_segmenter *seg, const pz_mesh *garment, pz_ctx *ctx)
+{
+    if (!seg->options->cache)
+        return PZ_OK;
+    pz_status status = pl_plane_and_field_key(seg->options, seg->prepared, seg->grain_hints, seg->given_plane,
+                                              garment, &seg->cache_key, ctx);
+    pl_plane_and_field cached;
+    memset(&cached, 0, sizeof cached);
+    int found = 0;
+    if (status == PZ_OK)
+        status = pl_run_cache_find(seg->options->cache, seg->cache_key, &cached, &found, ctx);
+    if (status != PZ_OK || !found) {
+        pl_plane_and_field_clear(&cached);
+        return status;
+    }
+    pz_symmetry_clear(&seg->symmetry);
+    seg->symmetry = cached.symmetry;
+    seg->plane = cached.plane;
+    seg->sketch_asymmetric = cached.sketch_asymmetric;
+    seg->field = cached.field;
+    seg->mirror_field = cached.mirror_field;
+    seg->field_reused = 1;
+    say_plane(seg, ctx);
+    pz_note(ctx, "run: field: reused (the same garment, sketch and options as a run before: %.0f ms then), %d "
+            "singularities", cached.field_ms, (int)(seg->mirror_field ? seg->mirror_field : seg->field)->singularity_count);
+    return PZ_OK;
+}
+
+/* The plane and field just computed, kept in the run's cache for the next run. */
+static pz_status keep_plane_and_field(const pl_segmenter *seg, pz_ctx *ctx)
+{
+    pl_plane_and_field value = {seg->symmetry, seg->plane, seg->sketch_asymmetric, seg->field, seg->mirror_field,
+                                seg->field_ms};
+    return seg->options->cache ? pl_run_cache_keep(seg->options->cache, seg->cache_key, &value, ctx) : PZ_OK;
 }
 
 /*
@@ -569,16 +615,22 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
     pz_sketch *sketch = NULL;
     pz_status status = pz_topology_build(garment, &topology, ctx);
     /* The plane before the sketch: mirrored strokes (mirror_sketch) join it, and strokes on one side only
-     * leave the plane unused. */
+     * leave the plane unused. Both, with the field, may come from a run before. */
+    double start = pz_seconds();
+    if (status == PZ_OK && !seg->field)
+        status = reuse_plane_and_field(seg, garment, ctx);
     if (status == PZ_OK && !seg->field)
         status = find_plane(seg, garment, topology, ctx);
+    if (status == PZ_OK && !seg->field)
+        say_plane(seg, ctx);
+    double plane_ms = pz_elapsed_ms(start, pz_seconds());
     if (status == PZ_OK)
         status = pl_gather_sketch(seg->options, seg->prepared, garment, seg->plane ? &seg->symmetry : NULL, &sketch,
                                   ctx);
     /* Before the long work: can S be met with sound pieces at all? (One line when it cannot.) */
     if (status == PZ_OK && !seg->outlook.measured)
         status = pl_strain_outlook(garment, seg->options, seg->grain, &seg->outlook, ctx);
-    double start = pz_seconds();
+    start = pz_seconds();
     /* The field depends on the original surface only: a verdict round reuses it. */
     if (status == PZ_OK && !seg->field) {
         pz_field_options options = seg->options->field;
@@ -594,11 +646,14 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         if (status == PZ_OK && seg->plane) /* the layouts made with the plane follow the field symmetrized about it */
             status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
                                        &seg->mirror_field, ctx);
-        seg->field_ms = pz_elapsed_ms(start, pz_seconds());
+        seg->field_ms = plane_ms + pz_elapsed_ms(start, pz_seconds());
         if (status == PZ_OK)
             pz_note(ctx, "run: field: %.0f ms, %d singularities", seg->field_ms,
                     (int)(seg->mirror_field ? seg->mirror_field : seg->field)->singularity_count);
-    }
+        if (status == PZ_OK)
+            status = keep_plane_and_field(seg, ctx);
+    } else if (status == PZ_OK && seg->field_reused && seg->field_ms == 0)
+        seg->field_ms = plane_ms;
     double field_end = pz_seconds();
     pl_stage(ctx, "segment", 0.2, 0.7, "layout");
     /* Goals stricter than the defaults: the layout is made here, verdict rounds included, so that it has at
@@ -1200,6 +1255,7 @@ void pl_segmenter_report(pl_segmenter *seg, pz_result *result)
     result->symmetry_used = seg->plane && seg->goals.symmetry_used;
     result->symmetry_rejected = seg->goals.plane_dropped != 0;
     result->symmetry_sketch_asymmetric = seg->sketch_asymmetric;
+    result->field_reused = seg->field_reused;
     result->pieces_with_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_with : -1;
     result->pieces_without_symmetry = seg->goals.symmetry_decided ? seg->goals.pieces_without : -1;
     result->mirror_pieces = seg->mirror_pieces;

@@ -101,6 +101,7 @@ static studio_output *make_output(pz_studio *studio, pz_result *result, int run_
     result->options.name = output->name;
     result->options.sketch = NULL; /* the job's, freed by the next run */
     result->options.garment_seams = NULL;
+    result->options.cache = NULL; /* the garment's */
     result->options.grain_hints = NULL;
     output->json = studio_result_json(result, run_id, ms, &output->json_length);
     if (!output->json) {
@@ -187,6 +188,7 @@ pz_status studio_run_start(pz_studio *studio, int id, const pz_run_options *opti
         return pz_error(ctx, PZ_ERR_USAGE, "garment %d: not loaded", id);
     }
     job->garment = garment;
+    job->options.cache = garment->cache;
     job->options.name = garment->name; /* names the pieces (the file's base name) and the messages */
     job->run_id = ++garment->next_run;
     job->previous = garment->job;
@@ -244,6 +246,7 @@ static void garment_free(pz_studio *studio, studio_garment *garment)
     studio_output_release(studio, garment->output);
     pz_mesh_free(&garment->mesh);
     pz_sketch_free(&garment->welded);
+    pz_run_cache_free(&garment->cache);
     free(garment->mesh_json);
     free(garment);
 }
@@ -340,7 +343,11 @@ pz_status studio_garment_load(pz_studio *studio, const char *path, const char *n
     studio_garment *garment = calloc(1, sizeof *garment);
     if (garment)
         garment->mesh_json = studio_mesh_json(mesh);
-    if (!garment || !garment->mesh_json) {
+    if (garment)
+        garment->cache = pz_run_cache_create();
+    if (!garment || !garment->mesh_json || !garment->cache) {
+        if (garment)
+            free(garment->mesh_json), pz_run_cache_free(&garment->cache);
         free(garment);
         pz_mesh_free(&mesh);
         pz_sketch_free(&welded);

@@ -73,6 +73,8 @@ typedef struct studio_garment {
     pz_mesh *mesh;                  /* as loaded, in millimetres, prepared (pz_prepare_auto) once; read by the
                                        runs (which do not prepare again), freed after them */
     pz_sketch *welded;              /* the seams the preparation welded, every run's garment_seams, or NULL */
+    pz_run_cache *cache;            /* the plane and field the runs leave each other (docs/run.md, "Reuse between
+                                       runs"; a run joins the one before it, so one run at a time uses it) */
     double mean_edge_mm;
     char *mesh_json;                /* {"positions": [...], "faces": [...]} of mesh */
     long last_used;

@@ -233,6 +233,64 @@ static void test_run_defaults(void)
     pz_mesh_free(&mesh);
 }
 
+/* Two runs sharing a pz_run_cache: the second reuses the plane and field when only S changes (and lays the
+ * garment out exactly as a run without the cache), computes them again when the sketch changes. */
+static void test_run_cache(void)
+{
+    pz_ctx ctx = {0};
+    ctx.quiet = 1;
+    pz_mesh *mesh = bodice(2000, 0);
+    pz_run_options options;
+    pz_run_options_default(&options);
+    options.consolidate = 0;
+    options.goals.max_strain = 0.06;
+    pz_result *plain = NULL, *first = NULL, *second = NULL;
+    REQUIRE_OK(pz_run(mesh, &options, &plain, &ctx), ctx);
+    CHECK(!plain->field_reused, "a run without a cache reused a field");
+    pz_run_cache *cache = pz_run_cache_create();
+    REQUIRE(cache, "pz_run_cache_create");
+    options.cache = cache;
+    REQUIRE_OK(pz_run(mesh, &options, &first, &ctx), ctx);
+    int64_t hits = -1, misses = -1;
+    pz_run_cache_counts(cache, &hits, &misses);
+    CHECK(!first->field_reused && hits == 0 && misses >= 1, "first run: reused %d, %lld hits, %lld misses",
+          first->field_reused, (long long)hits, (long long)misses);
+    options.goals.max_strain = 0.06; /* the same options again: the same layout from the kept field */
+    REQUIRE_OK(pz_run(mesh, &options, &second, &ctx), ctx);
+    pz_run_cache_counts(cache, &hits, &misses);
+    CHECK(second->field_reused && hits >= 1, "second run: reused %d, %lld hits", second->field_reused,
+          (long long)hits);
+    CHECK(second->pattern->panel_count == plain->pattern->panel_count &&
+              second->garment->face_count == plain->garment->face_count &&
+              memcmp(second->segment->face_panel, plain->segment->face_panel,
+                     (size_t)plain->segment->face_count * sizeof(int32_t)) == 0,
+          "the reused field gave another layout: %d panels against %d", (int)second->pattern->panel_count,
+          (int)plain->pattern->panel_count);
+    pz_result_free(&second);
+    /* Another S: still the same plane and field. */
+    options.goals.max_strain = 0.04;
+    REQUIRE_OK(pz_run(mesh, &options, &second, &ctx), ctx);
+    CHECK(second->field_reused, "a change of S did not reuse the field");
+    pz_result_free(&second);
+    /* A sketch: the field is computed again. */
+    double points[6];
+    for (int k = 0; k < 3; ++k) {
+        points[k] = mesh->positions[k];
+        points[3 + k] = mesh->positions[3 * (size_t)(mesh->vertex_count / 2) + k];
+    }
+    int32_t offsets[2] = {0, 2};
+    pz_sketch sketch = {1, offsets, points};
+    options.sketch = &sketch;
+    REQUIRE_OK(pz_run(mesh, &options, &second, &ctx), ctx);
+    CHECK(!second->field_reused, "a new sketch reused the field of a run without it");
+    pz_result_free(&second);
+    pz_result_free(&first);
+    pz_result_free(&plain);
+    pz_run_cache_free(&cache);
+    CHECK(cache == NULL, "pz_run_cache_free did not clear the pointer");
+    pz_mesh_free(&mesh);
+}
+
 static void test_impossible_goal(void)
 {
     pz_ctx ctx = {0};
@@ -608,6 +666,7 @@ int main(void)
 {
     test_temp_dir_create("pz_pipeline_run");
     test_run_defaults();
+    test_run_cache();
     test_impossible_goal();
     test_write_outputs();
     test_flatten_given_panels();
