@@ -1,6 +1,6 @@
 /*
  * core/util.h -- small containers shared by every stage (header only):
- * growing arrays and union-find.
+ * growing arrays, array copies and union-find.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -12,6 +12,22 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+
+/* A copy of `count` elements of `size` bytes (malloc'd, the caller's), or NULL for a NULL source; sets *failed
+ * when out of memory (a run of copies checks once). */
+static inline void *pz_copy_array(const void *source, size_t count, size_t size, int *failed)
+{
+    if (!source)
+        return NULL;
+    void *copy = malloc(count * size + 1);
+    if (!copy) {
+        *failed = 1;
+        return NULL;
+    }
+    memcpy(copy, source, count * size);
+    return copy;
+}
 
 /*
  * Makes room for `needed` elements of `element_size` bytes in *data, doubling

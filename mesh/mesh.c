@@ -5,6 +5,8 @@
  */
 #include "mesh.h"
 
+#include "core/util.h"
+
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -50,20 +52,6 @@ void pz_mesh_free(pz_mesh **mesh)
     *mesh = NULL;
 }
 
-/* Copies `count` elements of `size` bytes, or returns NULL for a NULL source. */
-static void *copy_array(const void *source, size_t count, size_t size, int *failed)
-{
-    if (!source)
-        return NULL;
-    void *copy = malloc(count * size + 1);
-    if (!copy) {
-        *failed = 1;
-        return NULL;
-    }
-    memcpy(copy, source, count * size);
-    return copy;
-}
-
 pz_status pz_mesh_copy(const pz_mesh *mesh, pz_mesh **out, pz_ctx *ctx)
 {
     *out = NULL;
@@ -73,12 +61,12 @@ pz_status pz_mesh_copy(const pz_mesh *mesh, pz_mesh **out, pz_ctx *ctx)
     *copy = *mesh;
     int failed = 0;
     size_t nv = (size_t)mesh->vertex_count, nf = (size_t)mesh->face_count;
-    copy->positions = copy_array(mesh->positions, nv * 3, sizeof(double), &failed);
-    copy->faces = copy_array(mesh->faces, nf * 3, sizeof(int32_t), &failed);
-    copy->uvs = copy_array(mesh->uvs, (size_t)mesh->uv_count * 2, sizeof(double), &failed);
-    copy->corner_uvs = copy_array(mesh->corner_uvs, nf * 3, sizeof(int32_t), &failed);
-    copy->face_labels = copy_array(mesh->face_labels, nf, sizeof(int32_t), &failed);
-    copy->poses = copy_array(mesh->poses, (size_t)mesh->pose_count * nv * 3, sizeof(double), &failed);
+    copy->positions = pz_copy_array(mesh->positions, nv * 3, sizeof(double), &failed);
+    copy->faces = pz_copy_array(mesh->faces, nf * 3, sizeof(int32_t), &failed);
+    copy->uvs = pz_copy_array(mesh->uvs, (size_t)mesh->uv_count * 2, sizeof(double), &failed);
+    copy->corner_uvs = pz_copy_array(mesh->corner_uvs, nf * 3, sizeof(int32_t), &failed);
+    copy->face_labels = pz_copy_array(mesh->face_labels, nf, sizeof(int32_t), &failed);
+    copy->poses = pz_copy_array(mesh->poses, (size_t)mesh->pose_count * nv * 3, sizeof(double), &failed);
     copy->label_names = NULL;
     if (mesh->label_names) {
         copy->label_names = calloc((size_t)mesh->label_count + 1, sizeof(char *));
@@ -86,7 +74,7 @@ pz_status pz_mesh_copy(const pz_mesh *mesh, pz_mesh **out, pz_ctx *ctx)
             failed = 1;
         for (int32_t i = 0; !failed && i < mesh->label_count; ++i)
             if (mesh->label_names[i])
-                copy->label_names[i] = copy_array(mesh->label_names[i], strlen(mesh->label_names[i]) + 1, 1, &failed);
+                copy->label_names[i] = pz_copy_array(mesh->label_names[i], strlen(mesh->label_names[i]) + 1, 1, &failed);
     } else {
         copy->label_names = NULL;
     }

@@ -187,6 +187,8 @@ typedef struct pl_plane_and_field {
     int sketch_asymmetric;    /* found and refused: the designer's sketch is not symmetric about it */
     pz_field *field;          /* the cross-field of the garment */
     pz_field *mirror_field;   /* the field symmetrized about the plane, or NULL */
+    pz_trace_graph *graph;    /* the tracing graph of `field` (the segmentation's graph options) */
+    pz_trace_graph *mirror_graph; /* of `mirror_field`, or NULL */
     double field_ms;          /* what computing them took */
 } pl_plane_and_field;
 

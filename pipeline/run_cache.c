@@ -1,7 +1,8 @@
 /*
  * pipeline/run_cache.c -- what one run leaves for the next run of the same
  * garment (docs/run.md, "Reuse between runs"): the mirror plane found before
- * the field and the cross-field with its mirrored version. Both depend on
+ * the field, the cross-field with its mirrored version and their tracing
+ * graphs. They depend on
  * the garment as laid out (positions, faces, poses), the sketch, the grain
  * hints and the field's and symmetry's options, and on nothing a designer
  * changes between two looks at a pattern (S, C, darts, the piece budget, the
@@ -45,6 +46,8 @@ void pl_plane_and_field_clear(pl_plane_and_field *value)
 {
     pz_field_free(&value->field);
     pz_field_free(&value->mirror_field);
+    pz_trace_graph_free(&value->graph);
+    pz_trace_graph_free(&value->mirror_graph);
     pz_symmetry_clear(&value->symmetry);
     memset(value, 0, sizeof *value);
 }
@@ -109,6 +112,8 @@ pz_status pl_plane_and_field_key(const pz_run_options *options, const pz_prepare
     hash = hash_int(hash, options->segment.symmetry);
     hash = hash_bytes(hash, options->segment.symmetry_plane, sizeof options->segment.symmetry_plane);
     hash = hash_int(hash, options->mirror_sketch);
+    hash = hash_bytes(hash, &options->segment.graph.match_angle_deg, sizeof(double));
+    hash = hash_bytes(hash, &options->segment.graph.drift_weight, sizeof(double));
     /* The designer's strokes (read again: a file may have changed), the garment's seams, the welded ones. */
     pz_sketch *designer = NULL;
     pz_status status = pl_designer_sketch(options, garment, &designer, ctx);
@@ -147,6 +152,10 @@ static pz_status copy_value(const pl_plane_and_field *from, pl_plane_and_field *
         status = pz_field_copy(from->field, &to->field, ctx);
     if (status == PZ_OK && from->mirror_field)
         status = pz_field_copy(from->mirror_field, &to->mirror_field, ctx);
+    if (status == PZ_OK && from->graph)
+        status = pz_trace_graph_copy(from->graph, &to->graph, ctx);
+    if (status == PZ_OK && from->mirror_graph)
+        status = pz_trace_graph_copy(from->mirror_graph, &to->mirror_graph, ctx);
     if (status != PZ_OK)
         pl_plane_and_field_clear(to);
     return status;

@@ -94,6 +94,8 @@ struct pl_segmenter {
     const pz_symmetry *given_plane;     /* the symmetric garment's plane and exact maps (pl_segmenter_give_plane) */
     const pz_sketch *grain_hints;       /* the designer's grain hints (pl_segmenter_give_grain_hints), or NULL */
     pz_field *mirror_field;             /* the field symmetrized about it (NULL without a plane) */
+    pz_trace_graph *graph;              /* the tracing graph of the field, built once for every layout */
+    pz_trace_graph *mirror_graph;       /* of the mirrored field (NULL without it) */
     int plane;                          /* 1: a plane was found or given (each goal setting decides its use) */
     int sketch_asymmetric;              /* 1: a plane was found, not used: the designer's sketch is not symmetric */
     uint64_t cache_key;                 /* the plane and field's key in options->cache (pl_plane_and_field_key) */
@@ -237,6 +239,7 @@ static pz_status segment_once(const pl_segmenter *seg, const pz_mesh *garment, c
     if (goals->verdict_rounds > 0)
         pz_note(progress, "run: segment again (round %d): the joint flattening rejected %s",
                 (int)goals->verdict_rounds + 1, goals->verdict_reasons);
+    options.prebuilt_graph = mirrored ? seg->mirror_graph : seg->graph;
     return pz_segment(garment, topology, mirrored ? seg->mirror_field : seg->field, &options, out, ctx);
 }
 
@@ -306,6 +309,8 @@ static pz_status reuse_plane_and_field(pl_segmenter *seg, const pz_mesh *garment
     seg->sketch_asymmetric = cached.sketch_asymmetric;
     seg->field = cached.field;
     seg->mirror_field = cached.mirror_field;
+    seg->graph = cached.graph;
+    seg->mirror_graph = cached.mirror_graph;
     seg->field_reused = 1;
     say_plane(seg, ctx);
     pz_note(ctx, "run: field: reused (the same garment, sketch and options as a run before: %.0f ms then), %d "
@@ -317,7 +322,7 @@ static pz_status reuse_plane_and_field(pl_segmenter *seg, const pz_mesh *garment
 static pz_status keep_plane_and_field(const pl_segmenter *seg, pz_ctx *ctx)
 {
     pl_plane_and_field value = {seg->symmetry, seg->plane, seg->sketch_asymmetric, seg->field, seg->mirror_field,
-                                seg->field_ms};
+                                seg->graph, seg->mirror_graph, seg->field_ms};
     return seg->options->cache ? pl_run_cache_keep(seg->options->cache, seg->cache_key, &value, ctx) : PZ_OK;
 }
 
@@ -646,6 +651,13 @@ pz_status pl_segmenter_choose(pl_segmenter *seg, pz_mesh *garment, pl_panel_choi
         if (status == PZ_OK && seg->plane) /* the layouts made with the plane follow the field symmetrized about it */
             status = pz_field_mirrored(garment, topology, seg->field, seg->symmetry.face_mirror, seg->symmetry.normal,
                                        &seg->mirror_field, ctx);
+        /* The tracing graphs, once for every layout of the run (and the runs after, through the cache). */
+        if (status == PZ_OK)
+            status = pz_trace_graph_build(garment, topology, seg->field->directions, &seg->options->segment.graph,
+                                          &seg->graph, ctx);
+        if (status == PZ_OK && seg->mirror_field)
+            status = pz_trace_graph_build(garment, topology, seg->mirror_field->directions,
+                                          &seg->options->segment.graph, &seg->mirror_graph, ctx);
         seg->field_ms = plane_ms + pz_elapsed_ms(start, pz_seconds());
         if (status == PZ_OK)
             pz_note(ctx, "run: field: %.0f ms, %d singularities", seg->field_ms,
@@ -1190,6 +1202,8 @@ void pl_segmenter_free(pl_segmenter **segmenter)
     free(seg->rungs);
     pz_field_free(&seg->field);
     pz_field_free(&seg->mirror_field);
+    pz_trace_graph_free(&seg->graph);
+    pz_trace_graph_free(&seg->mirror_graph);
     pz_symmetry_clear(&seg->symmetry);
     free(seg->original_positions);
     free(seg->original_poses);

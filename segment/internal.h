@@ -74,6 +74,7 @@ typedef struct seg_layout {
     int threads;
     int32_t max_candidates, max_depth;
     pz_trace_graph *graph;
+    int graph_borrowed;      /* 1: graph is options->prebuilt_graph, not this layout's to free */
     pz_symmetry symmetry;
     /* With a mirror plane (segment/mirror.c): the side of each face (0: the half the layout is made on,
      * 1: its mirror image) and the edges between the halves, cut first and removed last (NULL without). */

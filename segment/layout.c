@@ -295,6 +295,8 @@ void pz_segment_options_default(pz_segment_options *options)
 
 static void layout_free(seg_layout *layout)
 {
+    if (layout->graph_borrowed)
+        layout->graph = NULL;
     pz_trace_graph_free(&layout->graph);
     pz_symmetry_clear(&layout->symmetry);
     seg_mirror_free(layout);
@@ -414,7 +416,13 @@ pz_status pz_segment(const pz_mesh *mesh, const pz_topology *topology, const pz_
      * cent, insertion and removal with darts each a third to two thirds (the shared garments' report.json). */
     if (!status) {
         seg_progress_part(&layout, 0.05, "trace graph", ctx);
-        status = pz_trace_graph_build(mesh, topology, field->directions, &options->graph, &layout.graph, ctx);
+        if (options->prebuilt_graph) {
+            if (options->prebuilt_graph->vertex_count != mesh->vertex_count)
+                status = pz_error(ctx, PZ_ERR_USAGE, "segment: a prebuilt graph of another mesh");
+            layout.graph = (pz_trace_graph *)options->prebuilt_graph; /* read only here, never freed */
+            layout.graph_borrowed = 1;
+        } else
+            status = pz_trace_graph_build(mesh, topology, field->directions, &options->graph, &layout.graph, ctx);
     }
     if (!status && !(status = pz_check_cancel(ctx, "segment")))
         status = detect_symmetry(&layout, ctx);

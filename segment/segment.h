@@ -250,6 +250,10 @@ typedef struct pz_segment_options {
     int32_t max_depth;           /* recursion levels into failing panels; 0 = default */
     int threads;                 /* OpenMP threads; 0 = default. The result does not depend on it. */
     pz_trace_graph_options graph;
+    /* The tracing graph of this mesh and field, built with `graph` (pz_trace_graph_build), to use instead of
+     * building it again (borrowed, read only: the pipeline builds it once per field and shares it between
+     * its layouts and runs, docs/run.md "Reuse between runs"), or NULL: built here. */
+    const pz_trace_graph *prebuilt_graph;
     /* Panels known to fail (may be NULL): pz_segment_face_set_key of face sets that a previous
      * layout's final flattening (all panels jointly, seams coupled) found failing while their own
      * evaluation passed. A panel with one of these face sets fails with PZ_GOAL_VETOED, so the

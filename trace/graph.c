@@ -46,6 +46,7 @@
  */
 #include "trace/trace.h"
 #include "field/field.h"
+#include "core/util.h"
 #include "core/vec.h"
 
 #include <math.h>
@@ -66,6 +67,35 @@ void pz_trace_graph_free(pz_trace_graph **graph)
     free(g->neighbor_offsets), free(g->neighbor_vertices), free(g->neighbor_shift), free(g->neighbor_lengths);
     free(g);
     *graph = NULL;
+}
+
+pz_status pz_trace_graph_copy(const pz_trace_graph *graph, pz_trace_graph **out, pz_ctx *ctx)
+{
+    *out = NULL;
+    pz_trace_graph *g = calloc(1, sizeof *g);
+    if (!g)
+        return pz_error(ctx, PZ_ERR_NOMEM, "trace: out of memory copying a graph");
+    *g = *graph;
+    size_t vertices = (size_t)graph->vertex_count, nodes = (size_t)graph->node_count;
+    size_t links = (size_t)graph->link_offsets[graph->node_count];
+    size_t neighbors = (size_t)graph->neighbor_offsets[graph->vertex_count];
+    int failed = 0;
+    g->vertex_normals = pz_copy_array(graph->vertex_normals, 3 * vertices, sizeof(double), &failed);
+    g->vertex_arms = pz_copy_array(graph->vertex_arms, 3 * vertices, sizeof(double), &failed);
+    g->node_kind = pz_copy_array(graph->node_kind, nodes, 1, &failed);
+    g->link_offsets = pz_copy_array(graph->link_offsets, nodes + 1, sizeof(int32_t), &failed);
+    g->link_targets = pz_copy_array(graph->link_targets, links, sizeof(int32_t), &failed);
+    g->link_weights = pz_copy_array(graph->link_weights, links, sizeof(double), &failed);
+    g->neighbor_offsets = pz_copy_array(graph->neighbor_offsets, vertices + 1, sizeof(int32_t), &failed);
+    g->neighbor_vertices = pz_copy_array(graph->neighbor_vertices, neighbors, sizeof(int32_t), &failed);
+    g->neighbor_shift = pz_copy_array(graph->neighbor_shift, neighbors, 1, &failed);
+    g->neighbor_lengths = pz_copy_array(graph->neighbor_lengths, neighbors, sizeof(double), &failed);
+    if (failed) {
+        pz_trace_graph_free(&g);
+        return pz_error(ctx, PZ_ERR_NOMEM, "trace: out of memory copying a graph");
+    }
+    *out = g;
+    return PZ_OK;
 }
 
 /*

@@ -89,6 +89,8 @@ typedef struct pz_trace_graph_options {
 pz_status pz_trace_graph_build(const pz_mesh *mesh, const pz_topology *topology, const double *face_arms,
                                const pz_trace_graph_options *options, pz_trace_graph **out, pz_ctx *ctx);
 void pz_trace_graph_free(pz_trace_graph **graph);
+/** A deep copy of a graph into *out (the caller frees it with pz_trace_graph_free); PZ_ERR_NOMEM. */
+pz_status pz_trace_graph_copy(const pz_trace_graph *graph, pz_trace_graph **out, pz_ctx *ctx);
 
 /** Arm `arm` (0..3, taken mod 4) of a vertex's cross as a unit 3D vector (zero for an isolated vertex). */
 void pz_trace_arm_direction(const pz_trace_graph *graph, int32_t vertex, int arm, double out[3]);
