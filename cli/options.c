@@ -152,6 +152,9 @@ static pz_status parse_flatten_options(const pz_cli_args *args, pz_flatten_optio
 pz_status pz_cli_pipeline_options(const pz_cli_args *args, pz_run_options *options, pz_ctx *ctx)
 {
     pz_run_options_default(options);
+    /* Every command writes the result as soon as it has it: the marker and the trade-off are made by the
+     * write, beside the pattern files that do not need them (pipeline/write.c). */
+    options->defer_extras = 1;
     options->units = args->units;
     options->repair_flags = args->repair_flags;
     options->name = args->positional_count > 0 ? args->positionals[0] : NULL;

@@ -177,6 +177,9 @@ pz_status pl_sketch_symmetric_on(const pz_run_options *options, const pz_mesh *m
 /** Appends the mirror image through `plane` of every curve of `sketch` that has none (the test above). */
 pz_status pl_sketch_add_mirrors(pz_sketch *sketch, const pz_symmetry *plane, double tolerance, pz_ctx *ctx);
 
+/** 1 when nothing pz_run deferred is left for pz_result_complete to make (options.defer_extras). */
+int pl_result_completed(const pz_result *result);
+
 /* ---------------------------------------------------------------- run_cache.c */
 
 /** The mirror plane found before the field and the cross-field (with its mirrored version): what a run

@@ -172,6 +172,11 @@ static pz_status build_pieces(pz_result *result, pz_ctx *ctx)
     return status;
 }
 
+int pl_result_completed(const pz_result *result)
+{
+    return !result || ((!result->from_run || result->tradeoff_measured) && (result->marker || !result->pieces));
+}
+
 pz_status pz_result_complete(pz_result *result, pz_ctx *ctx)
 {
     if (!result)

@@ -15,6 +15,7 @@
 #include "pipeline/internal.h"
 
 #include <errno.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
@@ -248,7 +249,7 @@ static void list_outputs(writer *w, unsigned wanted)
     add_output(w, wanted, "garment.obj", OUT_GARMENT_OBJ, 0, 1);
     for (int i = 0; i < pz_export_file_count; ++i)
         if (strcmp(pz_export_files[i].name, "report.html") != 0 &&
-            (result->marker || strcmp(pz_export_files[i].name, "marker.svg") != 0))
+            (result->marker || result->pieces || strcmp(pz_export_files[i].name, "marker.svg") != 0))
             add_output(w, wanted, pz_export_files[i].name, OUT_EXPORT, i, pz_export_files[i].binary);
     if (result->from_run)
         add_output(w, wanted, "layout.obj", OUT_LAYOUT, 0, 1);
@@ -349,6 +350,57 @@ static pz_status make_parent(const char *folder, created_dirs *dirs, pz_ctx *ctx
     return status;
 }
 
+/* Whether an output draws on what pz_run may defer (pz_result_complete): the marker (marker.svg, garment.glb's
+ * texture space) or the trade-off (the reports). */
+static int needs_extras(const output_entry *entry)
+{
+    return entry->kind == OUT_REPORT || entry->kind == OUT_HTML || strcmp(entry->name, "marker.svg") == 0 ||
+           strcmp(entry->name, "garment.glb") == 0;
+}
+
+/* Opens and writes the outputs with needs_extras() == `extras` (files[i], paths[i], shown[i]). */
+static pz_status write_some(writer *w, int extras, pz_output *files, char **paths, char **shown, pz_ctx *ctx)
+{
+    pz_status status = PZ_OK;
+    for (int i = 0; i < w->output_count && status == PZ_OK; ++i) {
+        if (needs_extras(&w->outputs[i]) != extras)
+            continue;
+        /* Writers name the file by where it will be (messages); it is written where it is made. */
+        if ((status = pz_output_open(&files[i], paths[i], "wb", ctx)) == PZ_OK)
+            status = write_file(w, &w->outputs[i], shown[i], files[i].file, ctx);
+        if (status == PZ_OK)
+            status = pz_check_cancel(ctx, "write");
+    }
+    return status;
+}
+
+/*
+ * What pz_run deferred (the marker, the trade-off: pz_result_complete) made beside the files that do not need
+ * it, on a second thread when there is one (the wetsuit's marker is a second of one core; its pattern files
+ * half of one), then the files that do. The result is the same either way.
+ */
+static pz_status write_files(writer *w, pz_output *files, char **paths, char **shown, pz_ctx *ctx)
+{
+    pz_ctx side = *ctx; /* the completion's own error line; no progress from a second thread */
+    side.progress = NULL;
+    pz_status completed = PZ_OK, status = PZ_OK;
+    int threads = omp_get_max_threads() > 1 && !pl_result_completed(w->result) ? 2 : 1;
+#pragma omp parallel sections num_threads(threads)
+    {
+#pragma omp section
+        completed = pz_result_complete(w->result, &side);
+#pragma omp section
+        status = write_some(w, 0, files, paths, shown, ctx);
+    }
+    if (completed != PZ_OK && status == PZ_OK)
+        status = pz_error(ctx, completed, "%s", side.error);
+    if (status == PZ_OK) {
+        fill_export_inputs(w); /* the marker made just now */
+        status = write_some(w, 1, files, paths, shown, ctx);
+    }
+    return status;
+}
+
 /* Writes every listed file into `dir` (the hidden folder), each complete and synced. */
 static pz_status write_all(writer *w, const char *dir, const char *folder, int energy_wanted, const char **names,
                            int *name_count, pz_ctx *ctx)
@@ -364,13 +416,8 @@ static pz_status write_all(writer *w, const char *dir, const char *folder, int e
     for (int i = 0; i < count && status == PZ_OK; ++i)
         if (!(paths[i] = join_path(dir, w->outputs[i].name)) || !(shown[i] = join_path(folder, w->outputs[i].name)))
             status = pz_error(ctx, PZ_ERR_NOMEM, "%s: out of memory", folder);
-    for (int i = 0; i < count && status == PZ_OK; ++i) {
-        /* Writers name the file by where it will be (messages); it is written where it is made. */
-        if ((status = pz_output_open(&files[i], paths[i], "wb", ctx)) == PZ_OK)
-            status = write_file(w, &w->outputs[i], shown[i], files[i].file, ctx);
-        if (status == PZ_OK)
-            status = pz_check_cancel(ctx, "write");
-    }
+    if (status == PZ_OK)
+        status = write_files(w, files, paths, shown, ctx);
     for (; committed < count && status == PZ_OK; ++committed)
         if ((status = pz_output_commit(&files[committed], ctx)) == PZ_OK)
             names[(*name_count)++] = w->outputs[committed].name;
@@ -403,9 +450,6 @@ pz_status pz_result_write(pz_result *result, const char *folder, unsigned output
     memset(&w, 0, sizeof w);
     w.result = result;
     w.write_start = pz_seconds();
-    pz_status completed = pz_result_complete(result, ctx); /* what pz_run deferred (defer_extras) */
-    if (completed != PZ_OK)
-        return completed;
     fill_export_inputs(&w);
     list_outputs(&w, outputs);
     int energy_wanted = result->options.flatten.backend == PZ_BACKEND_SPRINGMASS && (outputs & PZ_OUTPUT_ENERGY_SVG);
