@@ -8,7 +8,9 @@
  *                  their seams and darts mapped onto the prepared garment
  *   segmentation.c the automatic layout with its verdict rounds and the
  *                  looser goal settings that keep panel counts monotone
- *   sketches.c     the designer's lines gathered for it (pl_gather_sketch)
+ *   sketches.c     the designer's lines gathered for it (pl_gather_sketch), their
+ *                  symmetry about the plane, their mirror images (mirror_sketch)
+ *   run_cache.c    the plane, field and graphs kept for the next run (pz_run_cache)
  *   flatten.c      the chosen back-end, the pieces laid out, metrics
  *   verdict.c      the final verdict on every panel (pz_goal_judge) and the
  *                  pattern's mirror symmetry
@@ -19,7 +21,8 @@
  *   pipeline.c     pz_run, pz_flatten, pz_result_free: the stages in order
  *   names.c        the pieces' names from their place on the garment
  *   report.c       report.json (pz_result_report)
- *   write.c        pz_result_write: every file, all or nothing
+ *   write.c        pz_result_write: every file, all or nothing (the deferred marker
+ *                  and trade-off made beside the files that need neither)
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
