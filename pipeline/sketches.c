@@ -162,15 +162,16 @@ typedef struct mirror_sample {
     int32_t curve;
 } mirror_sample;
 
+/* The cell's three indices, 21 bits each (unsigned: no overflow), in one key. */
 static int64_t cell_key(const double p[3], double cell)
 {
-    int64_t key = 0;
+    uint64_t key = 0;
     for (int d = 0; d < 3; ++d) {
         double c = floor(p[d] / cell);
         c = fmax(fmin(c, 1e6), -1e6); /* far points share the border cells: a slower search, never a wrong one */
-        key = key * 4194304 + ((int64_t)c + 2097152);
+        key = (key << 21) | (uint64_t)((int64_t)c + 1048576); /* 48,576 .. 2,048,576 < 2^21 */
     }
-    return key;
+    return (int64_t)key; /* < 2^63 */
 }
 
 static int by_cell(const void *a, const void *b)
