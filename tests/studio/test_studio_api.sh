@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # tests/studio/test_studio_api.sh -- `panelize studio`'s JSON API with curl (docs/studio.md): a garment
 # loaded by path and by upload, a run and its result (a panel per face, pieces, seams, verdict), a new
-# run cancelling the running one, cancel, the pattern files downloaded and written; and every bad
+# run cancelling the running one, cancel, a one-sided stroke (no plane; the run cache reused when only S
+# changes; mirror_sketch), the pattern files downloaded and written; and every bad
 # request answered 4xx with a message, the server still up after them: bad JSON, wrong types and
 # ranges, unknown options, too many or too long strokes, points far from the garment, paths outside
 # the allowed folder, a wrong Content-Type, a foreign Host, a body over the limit, unknown garments.
@@ -135,6 +136,38 @@ check "cancel: $code" [ "$code" = 200 ]
 state=$(wait_run "$id" "$run3")
 check "a cancelled run ends cancelled, not $state" [ "$state" = cancelled ]
 check "the last result stays run 2's" [ "$(json "d['result_run']")" = 2 ]
+
+# A stroke on one side of the symmetric bodice: laid out without the plane (docs/run.md, "Sketches and
+# symmetry"); the same stroke with another S reuses the garment's plane and field (the run cache); with
+# mirror_sketch the stroke's mirror image joins it and the sketch no longer refuses the plane.
+api GET "/api/garments/$id"
+side=$(python3 -c '
+import json, sys
+p = json.load(open(sys.argv[1]))["mesh"]["positions"]
+vs = [p[i:i + 3] for i in range(0, len(p), 3)]
+top = max(v[2] for v in vs)
+points = []
+for i in range(13):
+    best = min((v for v in vs if v[1] > 0), key=lambda v: (v[0] - 60) ** 2 + (v[2] - top * (0.1 + 0.8 * i / 12)) ** 2)
+    if best not in points:
+        points.append(best)
+print(json.dumps(points))' "$WORK/body")
+one_sided_run() { # one_sided_run BODY: its report into $WORK/body
+    api POST "/api/garments/$id/run" "$1"
+    local run
+    run=$(json "d['run']")
+    state=$(wait_run "$id" "$run")
+    check "run ${1:0:50}: ends done, not $state" [ "$state" = done ]
+    api GET "/api/garments/$id/report"
+}
+one_sided_run "{\"strokes\": [$side], \"consolidate\": false}"
+check "a one-sided stroke kept the plane or did not say so" \
+    [ "$(json "d['segmentation']['symmetry']['sketch_not_symmetric'] and not d['segmentation']['symmetry']['used']")" = True ]
+one_sided_run "{\"strokes\": [$side], \"consolidate\": false, \"max_strain\": 0.06}"
+check "the same stroke with another S did not reuse the plane and field" [ "$(json "d['segmentation']['field_reused']")" = True ]
+one_sided_run "{\"strokes\": [$side], \"consolidate\": false, \"mirror_sketch\": true}"
+check "mirror_sketch: the stroke still counted as one-sided" \
+    [ "$(json "d['segmentation']['mirror_sketch'] and not d['segmentation']['symmetry']['sketch_not_symmetric'] and not d['segmentation']['field_reused']")" = True ]
 
 # ------------------------------------------------------------------ files
 code=$(curl -s -o pattern.dxf -w '%{http_code}' "${URL}api/garments/$id/files/pattern.dxf")
