@@ -136,15 +136,9 @@ pz_status pl_gather_sketch(const pz_run_options *options, const pz_prepare_resul
 
 double pl_sketch_mirror_tolerance(const pz_mesh *mesh)
 {
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int32_t v = 0; v < mesh->vertex_count; ++v)
-        for (int d = 0; d < 3; ++d) {
-            lo[d] = fmin(lo[d], mesh->positions[3 * (size_t)v + d]);
-            hi[d] = fmax(hi[d], mesh->positions[3 * (size_t)v + d]);
-        }
-    double diagonal = mesh->vertex_count > 0 ? sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                                                    (hi[2] - lo[2]) * (hi[2] - lo[2]))
-                                             : 0;
+    double lo[3], hi[3];
+    pz_mesh_bbox(mesh, lo, hi);
+    double diagonal = pz_vec3_distance(lo, hi);
     /* Strokes snapped to vertices by hand or by a script zigzag by up to an edge either side: two edges apart is
      * still the same line on a coarse mesh. */
     double edge_sum = 0;
