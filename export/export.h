@@ -184,6 +184,9 @@ typedef struct pz_marker {
     double fabric_width_mm;
     double length_mm;            /* used length of the fabric */
     double efficiency;           /* sum of piece areas (cut lines) / (width x length) */
+    double shortest_possible_mm; /* no marker of the placed pieces is shorter: the tallest piece (the grain keeps
+                                  * them upright) or their area over the width, whichever is longer */
+    double efficiency_bound;     /* the efficiency of a marker that short: what no nesting can pass */
     int32_t passes;              /* greedy placement passes the search ran (docs/marker.md) */
     double ms;                   /* time to build */
     int32_t unplaced_count;      /* pieces wider than the fabric in both turns: not in the marker */
@@ -193,7 +196,7 @@ typedef struct pz_marker {
 /**
  * Nests every piece (each copy of its cut quantity) on a fabric of
  * fabric_width_mm along x, growing along y, rotations 0 or 180 degrees
- * only, pairs placed side by side, gap_mm between pieces (method in
+ * only, the two copies of a Cut-2 piece side by side as a pair or each on its own, gap_mm between pieces (method in
  * docs/marker.md). A piece wider than the fabric (its cut line's width, the
  * same at 0 and 180 degrees) cannot be cut from it with the grain kept: it is
  * left out and listed in unplaced (the rest is still nested; the caller

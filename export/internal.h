@@ -81,18 +81,17 @@ void marker_demand_clear(marker_demand *d);
 
 /* ------------------------------------------------------------------ marker: the fabric grid */
 
-/* Stretch lengths fit in 16 bits (marker_grid_make keeps the columns below 32000): half the memory traffic. */
-typedef int16_t marker_stretch;
+/* The grid's columns stay below this (the transposed grid of a long marker is refused above it). */
 #define MARKER_MAX_COLUMNS 32000
 
 typedef struct marker_grid {
     marker_raster raster;
     int32_t margin;        /* cells left of x = 0 and below y = 0: the gap may hang over the edge */
     int32_t columns;       /* grid columns, margins included */
+    int32_t words;         /* 64-bit words a row of the occupancy bitmap takes: ceil(columns / 64) */
     int32_t rows;          /* rows allocated (everything above is free) */
     int32_t dirty_rows;    /* rows written since the last reset */
-    uint8_t *occupied;     /* rows x columns */
-    marker_stretch *free_run; /* rows x columns: free cells from here rightwards, or minus the occupied ones */
+    uint64_t *occupied;    /* rows x words: bit x % 64 of word x / 64 set when cell x of the row is occupied */
     int32_t *longest_run;  /* rows: the longest free run of each row */
     int32_t *block_longest; /* rows / ROW_BLOCK (32): the longest free run of each block of rows */
     int64_t work;          /* rows and positions tried by grid_find: the search's budget counts them */
@@ -108,19 +107,28 @@ typedef struct marker_score {
 } marker_score;
 
 /* The empty grid of a fabric width_mm wide with pieces gap_mm apart (no rows yet: marker_grid_grow): cells of
- * width_mm / cells_across mm, at least finest_mm (and few enough for 16-bit stretches). */
+ * width_mm / cells_across mm, at least finest_mm (and few enough that a row has fewer than MARKER_MAX_COLUMNS). */
 marker_grid marker_grid_make(double width_mm, double gap_mm, double cells_across, double finest_mm);
 /* At least `rows` rows allocated (new ones free). 0 when out of memory. */
 int marker_grid_grow(marker_grid *g, int32_t rows);
 void marker_grid_free(marker_grid *g);
 /* 1 when pass score a is better than b: shorter, then (within 1e-6 mm) a lower sum of tops. */
 int marker_score_better(marker_score a, marker_score b);
+/* An order entry: one copy of a piece (demand, copy 0 or 1), whether a Cut-2 piece goes as a pair or its copies
+ * separately (split: the same on both its entries), and its turn (0: the best, 1 or 2: pinned to 0 or 180
+ * degrees for copy 0, or for a split copy that copy). */
+#define MARKER_ENTRY(demand, copy, split, turn) ((((demand) * 2 + (copy)) * 2 + (split)) * 3 + (turn))
+#define MARKER_ENTRY_DEMAND(entry) ((entry) / 12)
+#define MARKER_ENTRY_COPY(entry) ((entry) / 6 % 2)
+#define MARKER_ENTRY_SPLIT(entry) ((entry) / 3 % 2)
+#define MARKER_ENTRY_TURN(entry) ((entry) % 3)
 /*
- * One greedy pass on grid g (the fabric, or its transpose for the column fill): placements into out (count
- * written, fabric coordinates either way). order[i] = demand * 3 + turn: turn 0 takes the candidate whose top
- * ends lowest, 1 and 2 the first or second half of the candidates only (copy 0 at 0 or 180 degrees) unless
- * none of those fits. On a transposed grid a unit that fits nowhere (taller than the length tried) ends the
- * pass with an infinite score.
+ * One greedy pass on grid g (the fabric, or its transpose for the column fill) over the `count` entries of
+ * `order`: placements into out (count written, fabric coordinates either way). A paired Cut-2 piece goes as a pair
+ * at its copy 0's entry (its copy 1's passed over), falling back on its two copies when no pair fits across the
+ * fabric; a split one copy by copy. Turn 0 takes the candidate whose top ends lowest, 1 and 2 the first or second
+ * half of the candidates only unless none of those fits. On a transposed grid a unit that fits nowhere (taller
+ * than the length tried) ends the pass with an infinite score.
  */
 pz_status marker_nest_pass(marker_grid *g, const pz_pieces *pieces, const marker_demand *demands, const int32_t *order,
                            int32_t count, pz_marker_placement *out, int32_t *out_count, marker_score *score,

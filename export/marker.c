@@ -16,26 +16,29 @@
  *    are therefore at least `gap` apart, exactly. A shape is kept as runs of
  *    set cells per row, so concave outlines keep their hollows and other
  *    pieces can reach into them.
- *  - A Cut-2 piece is one unit: copy 0 and its mirror image pushed against
+ *  - A Cut-2 piece goes as a pair (copy 0 and its mirror image pushed against
  *    its right side as close as their cells allow, in the four rotation
- *    combinations. When no combination fits across the fabric the copies go
- *    separately.
+ *    combinations) or as two copies placed each on its own: the order says
+ *    which (an entry per copy, MARKER_ENTRY). A pair that fits nowhere across
+ *    the fabric goes as its copies.
  *  - A unit goes to the lowest, then leftmost, grid position where every
  *    run lies on free cells, in the rotation whose top ends lowest. The
- *    fabric keeps, per cell, a signed stretch length (the free cells from
- *    here rightwards, or minus the occupied ones): a run is one lookup, and
- *    a blocked run says how far right the next candidate is, so a fabric row
- *    costs O(obstacles in it), not O(width). Before a row is tried, eight
- *    probe rows of the shape must meet fabric rows with a long enough free
+ *    fabric is a bitmap checked a word (64 cells) at a time; a blocked run
+ *    says how far right the next candidate is, so a fabric row costs
+ *    O(obstacles in it), not O(width). Before a row is tried, eight probe
+ *    rows of the shape must meet fabric rows with a long enough free
  *    stretch; maxima over blocks of 32 rows let a probe skip a block at once.
  *    A position is checked row by row in a strided order (widest row, then
- *    every 64th, 32nd, ...): a blocked one is found blocked after a few rows.
- *    Placing a shape mends only the stretches around its runs.
+ *    every 64th, 32nd, ...): a blocked one is found blocked after a few rows
+ *    (export/marker_grid.c).
  *  - Order: greedy passes over four fixed orders (area, height, width,
- *    large and small alternating), then walks of a local search (swap two
- *    pieces, move one, or pin one's rotation), each new walk from a random
- *    order once the last one stalls, keeping the shortest marker (ties: the
- *    lower sum of the units' tops).
+ *    large and small alternating; each with the pairs kept and split), then
+ *    walks of a local search (swap two entries, move one, pin one's
+ *    rotation, or split or join a pair), each new walk from a random order
+ *    once the last one stalls, keeping the shortest marker (ties: the lower
+ *    sum of the units' tops). The search stops as soon as a marker is within
+ *    a cell of the shortest possible (the tallest piece; the pieces' area over
+ *    the width).
  *  - Column fill (markers up to two fabric widths long): the same machinery
  *    on the transposed fabric fills across the width under a fixed length L
  *    (leftmost, then lowest), so the marker ends level at L where the
@@ -47,8 +50,7 @@
  *  - Budgets are counted in grid_find's steps and in passes, not timed:
  *    deterministic, no threads, no clock, a fixed xorshift seed; a marker of
  *    many pieces on a long fabric gets fewer passes.
- * Memory: the shapes' runs (O(cells on their rows)), three bytes per fabric
- * cell (occupancy, 16-bit stretch). Fails with PZ_ERR_DATA for a piece wider than the fabric
+ * Memory: the shapes' runs (O(cells on their rows)), a bit per fabric cell. Fails with PZ_ERR_DATA for a piece wider than the fabric
  * or with a cut-line coordinate out of range, PZ_ERR_USAGE for a fabric
  * width out of range, PZ_ERR_NOMEM.
  *
@@ -108,25 +110,45 @@ void pz_marker_place_points(const pz_piece *piece, const pz_marker_placement *pl
 
 /* ------------------------------------------------------------------ the search over orders */
 
-/* The fixed orders: by area, height, width (decreasing), and by area with large and small pieces alternating. */
+/* The fixed orders: by area, height, width (decreasing), and by area with large and small pieces alternating; each
+ * with the Cut-2 pieces paired and, when there are any, split (SPLIT_ORDERS). */
 enum { kFixedOrders = 4 };
 
+/* The entries of the demands in `demands_in_order` (count of them), each demand's copies one after the other. */
+static int32_t entries_of(const marker_demand *demands, const int32_t *demands_in_order, int32_t count, int split,
+                          int32_t *order)
+{
+    int32_t entry_count = 0;
+    for (int32_t i = 0; i < count; ++i) {
+        int32_t d = demands_in_order[i];
+        for (int c = 0; c < demands[d].copies; ++c)
+            order[entry_count++] = MARKER_ENTRY(d, c, split && demands[d].copies == 2, 0);
+    }
+    return entry_count;
+}
+
+/* Fixed order `which` (0 .. 2 kFixedOrders - 1: from kFixedOrders on, the same with every Cut-2 piece split) of
+ * `count` demands into order (their entries); scratch holds 2 count. */
 static void fixed_order(const marker_demand *demands, int32_t count, int which, int32_t *order, int32_t *scratch)
 {
+    int split = which >= kFixedOrders;
+    which %= kFixedOrders;
     int key = which == 3 ? 0 : which;
+    int32_t *sorted = scratch, *alternating = scratch + count;
     for (int32_t i = 0; i < count; ++i)
-        order[i] = 3 * i;
+        sorted[i] = i;
     /* Insertion sort, decreasing key, stable (demands are in piece order): few pieces, and deterministic. */
     for (int32_t i = 1; i < count; ++i)
-        for (int32_t j = i; j > 0 && demands[order[j] / 3].keys[key] > demands[order[j - 1] / 3].keys[key]; --j) {
-            int32_t t = order[j];
-            order[j] = order[j - 1], order[j - 1] = t;
+        for (int32_t j = i; j > 0 && demands[sorted[j]].keys[key] > demands[sorted[j - 1]].keys[key]; --j) {
+            int32_t t = sorted[j];
+            sorted[j] = sorted[j - 1], sorted[j - 1] = t;
         }
-    if (which != 3)
-        return;
-    for (int32_t i = 0, large = 0, small = count - 1; i < count; ++i)
-        scratch[i] = i % 2 == 0 ? order[large++] : order[small--];
-    memcpy(order, scratch, (size_t)count * sizeof *order);
+    if (which == 3) {
+        for (int32_t i = 0, large = 0, small = count - 1; i < count; ++i)
+            alternating[i] = i % 2 == 0 ? sorted[large++] : sorted[small--];
+        sorted = alternating;
+    }
+    entries_of(demands, sorted, count, split, order);
 }
 
 /* xorshift64*: a fixed sequence, so the search is deterministic. */
@@ -138,26 +160,47 @@ static uint64_t next_random(uint64_t *state)
     return *state * 2685821657736338717ull;
 }
 
-/* A random order (Fisher-Yates from the fixed xorshift sequence), every piece's turn free. */
-static void random_order(int32_t *order, int32_t count, uint64_t *state)
+/* A random order of the `count` demands' entries (Fisher-Yates from the fixed xorshift sequence), every turn free,
+ * each Cut-2 piece paired or split at random; *entry_count entries written. */
+static void random_order(const marker_demand *demands, int32_t count, int32_t *order, int32_t entry_count,
+                         uint64_t *state)
 {
-    for (int32_t i = 0; i < count; ++i)
-        order[i] = 3 * i;
-    for (int32_t i = count - 1; i > 0; --i) {
+    for (int32_t d = 0, k = 0; d < count; ++d) {
+        int split = demands[d].copies == 2 && next_random(state) % 2;
+        for (int c = 0; c < demands[d].copies; ++c)
+            order[k++] = MARKER_ENTRY(d, c, split, 0);
+    }
+    for (int32_t i = entry_count - 1; i > 0; --i) {
         int32_t j = (int32_t)(next_random(state) % (uint64_t)(i + 1)), t = order[i];
         order[i] = order[j], order[j] = t;
     }
 }
 
-/* A neighbour of `order`: one piece's turn changed, two pieces swapped, or one moved to another place. */
-static void perturb(int32_t *order, int32_t count, uint64_t *state)
+/* Entry i's piece paired if it was split and split if it was paired: both of its entries. */
+static void toggle_split(int32_t *order, int32_t count, int32_t i)
+{
+    int32_t demand = MARKER_ENTRY_DEMAND(order[i]);
+    int step = MARKER_ENTRY_SPLIT(order[i]) ? -3 : 3;
+    for (int32_t k = 0; k < count; ++k)
+        if (MARKER_ENTRY_DEMAND(order[k]) == demand)
+            order[k] += step;
+}
+
+/* A neighbour of `order` (count entries): one entry's turn changed, two entries swapped, one moved to another
+ * place, or (when the marker has Cut-2 pieces: `has_pairs`) one Cut-2 piece paired or split. */
+static void perturb(const marker_demand *demands, int32_t *order, int32_t count, int has_pairs, uint64_t *state)
 {
     int32_t i = (int32_t)(next_random(state) % (uint64_t)count);
     int32_t j = (int32_t)(next_random(state) % (uint64_t)(count - 1));
     j += j >= i;
-    uint64_t move = next_random(state) % 3;
-    if (move == 0) {
-        order[i] = order[i] / 3 * 3 + (order[i] % 3 + 1 + (int32_t)(next_random(state) % 2)) % 3;
+    uint64_t move = next_random(state) % (has_pairs ? 4 : 3);
+    if (move == 3 && demands[MARKER_ENTRY_DEMAND(order[i])].copies == 2) {
+        toggle_split(order, count, i);
+        return;
+    }
+    if (move == 0 || move == 3) {
+        int turn = MARKER_ENTRY_TURN(order[i]);
+        order[i] += (turn + 1 + (int32_t)(next_random(state) % 2)) % 3 - turn;
         return;
     }
     if (move == 1) {
@@ -178,7 +221,9 @@ typedef struct search {
     marker_grid column;                /* the column fill's (transposed; columns == 0 until column_grid makes it) */
     const pz_pieces *pieces;
     const marker_demand *demands;
-    int32_t count;              /* demands */
+    int32_t demand_count;       /* demands: the drawn pieces that fit the fabric */
+    int32_t count;              /* order entries: one per copy (a Cut-2 piece has two) */
+    int has_pairs;              /* some demand is a Cut-2 piece: the search may split pairs */
     int32_t *order, *trial_order, *scratch;
     pz_marker_placement *trial; /* a pass's placements */
     pz_marker *best;            /* the best pass so far (placements, placement_count) */
@@ -187,6 +232,7 @@ typedef struct search {
     int64_t work;               /* grid_find's steps over all passes */
     uint64_t random;            /* xorshift state */
     double work_scale;          /* the step budgets' share on this grid: its cells across / FINAL_CELLS_ACROSS */
+    double shortest_possible;   /* no marker is shorter (mm): the tallest piece, the pieces' area over the width */
     /* The best few passes (their orders, and the column fill's length for a transposed one, else 0), best first:
      * the fine grid runs them again (pz_marker_build). NULL orders: none kept. */
     int32_t *elite_orders;
@@ -219,6 +265,13 @@ static void elite_offer(search *s, const int32_t *order, marker_score score, dou
     s->elite_score[at] = score, s->elite_length[at] = column_length;
     memcpy(s->elite_orders + (size_t)at * (size_t)s->count, order, (size_t)s->count * sizeof *order);
     s->elite_count += s->elite_count < ELITE;
+}
+
+/* 1 when the best marker so far is within a cell of the shortest possible: no order can do better on this grid
+ * (a piece's lowest position leaves up to a cell below it), and the search can stop. */
+static int search_at_bound(const search *s)
+{
+    return s->passes > 0 && s->best_score.length <= s->shortest_possible + s->grid.raster.resolution + 1e-9;
 }
 
 /* Runs one pass over `order` on grid g; keeps it in s->best when its marker is shorter (a column fill's only when
@@ -258,8 +311,10 @@ static pz_status search_fixed(search *s, marker_grid *g, int64_t budget, marker_
     pz_status status = PZ_OK;
     marker_score score;
     *current = (marker_score){INFINITY, INFINITY, 0};
-    for (int which = 0; which < kFixedOrders && (which == 0 || s->work < budget) && status == PZ_OK; ++which) {
-        fixed_order(s->demands, s->count, which, s->trial_order, s->scratch);
+    int orders = s->has_pairs ? 2 * kFixedOrders : kFixedOrders;
+    for (int which = 0; which < orders && (which == 0 || (s->work < budget && !search_at_bound(s))) && status == PZ_OK;
+         ++which) {
+        fixed_order(s->demands, s->demand_count, which, s->trial_order, s->scratch);
         status = search_try(s, g, s->trial_order, &score, ctx);
         if (status == PZ_OK && marker_score_better(score, *current))
             search_adopt(s, s->trial_order, &score, current);
@@ -272,7 +327,7 @@ static pz_status search_fixed(search *s, marker_grid *g, int64_t budget, marker_
 static pz_status search_step(search *s, marker_grid *g, marker_score *current, marker_score *score, pz_ctx *ctx)
 {
     memcpy(s->trial_order, s->order, (size_t)s->count * sizeof *s->order);
-    perturb(s->trial_order, s->count, &s->random);
+    perturb(s->demands, s->trial_order, s->count, s->has_pairs, &s->random);
     pz_status status = search_try(s, g, s->trial_order, score, ctx);
     if (status == PZ_OK && !marker_score_better(*current, *score))
         search_adopt(s, s->trial_order, score, current);
@@ -291,11 +346,11 @@ static pz_status search_rows(search *s, pz_ctx *ctx)
     pz_status status = search_fixed(s, &s->grid, budget, &current, ctx);
     int32_t since_better = 0;
     marker_score walk_best = current;
-    int32_t max_passes = kFixedOrders + SEARCH_PASSES_PER_PIECE * (s->count - 1);
+    int32_t max_passes = kFixedOrders + SEARCH_PASSES_PER_PIECE * (s->demand_count - 1);
     max_passes = max_passes < SEARCH_MAX_PASSES ? max_passes : SEARCH_MAX_PASSES;
-    while (s->work < budget && s->passes < max_passes && s->count > 1 && status == PZ_OK) {
+    while (s->work < budget && s->passes < max_passes && s->count > 1 && status == PZ_OK && !search_at_bound(s)) {
         if (since_better >= SEARCH_STALL) { /* a new walk */
-            random_order(s->order, s->count, &s->random);
+            random_order(s->demands, s->demand_count, s->order, s->count, &s->random);
             status = search_try(s, &s->grid, s->order, &score, ctx);
             search_adopt(s, s->order, &score, &current);
             walk_best = current, since_better = 0;
@@ -322,7 +377,7 @@ static int column_grid(search *s, double length_mm)
     }
     /* The units transposed, the first time a column fill runs (search_open made the demands, so they are ours). */
     marker_demand *demands = (marker_demand *)s->demands;
-    for (int32_t i = 0; i < s->count; ++i)
+    for (int32_t i = 0; i < s->demand_count; ++i)
         if (!marker_demand_transpose(&demands[i]))
             return -1;
     marker_grid g = {.raster = s->grid.raster, .margin = s->grid.margin, .transposed = 1,
@@ -346,14 +401,15 @@ static pz_status search_columns(search *s, pz_ctx *ctx)
 {
     const double resolution = s->grid.raster.resolution;
     double tallest = 0.0;
-    for (int32_t i = 0; i < s->count; ++i)
+    for (int32_t i = 0; i < s->demand_count; ++i)
         tallest = fmax(tallest, s->demands[i].singles[0][0][0].hi[1] - s->demands[i].singles[0][0][0].lo[1]);
     int64_t budget = s->work + (int64_t)(COLUMN_WORK * s->work_scale);
     int32_t max_passes = s->passes + COLUMN_MAX_PASSES, since_feasible = 0;
     pz_status status = PZ_OK;
     marker_score current, score;
     int first = 1;
-    while (status == PZ_OK && s->work < budget && s->passes < max_passes && since_feasible < COLUMN_STALL) {
+    while (status == PZ_OK && s->work < budget && s->passes < max_passes && since_feasible < COLUMN_STALL &&
+           !search_at_bound(s)) {
         double length = s->best_score.length - fmax(2 * resolution, COLUMN_STEP * s->best_score.length);
         if (length < tallest + 2 * resolution)
             break;
@@ -385,7 +441,8 @@ static pz_status search_columns(search *s, pz_ctx *ctx)
 static pz_status search_run(search *s, pz_ctx *ctx)
 {
     pz_status status = search_rows(s, ctx);
-    if (status == PZ_OK && s->count > 0 && s->best_score.length <= COLUMN_MAX_WIDTHS * s->grid.raster.width_mm)
+    if (status == PZ_OK && s->count > 0 && s->best_score.length <= COLUMN_MAX_WIDTHS * s->grid.raster.width_mm &&
+        !search_at_bound(s))
         status = search_columns(s, ctx);
     return status;
 }
@@ -465,7 +522,7 @@ static pz_status search_open(search *s, const pz_pieces *pieces, double width_mm
     *s = (search){.grid = marker_grid_make(width_mm, gap_mm, cells_across, 1.0), .pieces = pieces};
     marker_demand *demands = calloc(n, sizeof *demands);
     s->demands = demands;
-    s->order = malloc(3 * n * sizeof(int32_t));
+    s->order = malloc(3 * 2 * n * sizeof(int32_t)); /* the order, a trial order, scratch: 2 entries a piece */
     s->trial = malloc(2 * n * sizeof *s->trial);
     s->best = calloc(1, sizeof *s->best);
     if (s->best) {
@@ -473,14 +530,24 @@ static pz_status search_open(search *s, const pz_pieces *pieces, double width_mm
         s->best->unplaced = malloc(n * sizeof *s->best->unplaced);
     }
     if (elite)
-        s->elite_orders = malloc((size_t)ELITE * n * sizeof(int32_t));
+        s->elite_orders = malloc((size_t)ELITE * 2 * n * sizeof(int32_t));
     if (!demands || !s->order || !s->trial || !s->best || !s->best->placements || !s->best->unplaced ||
         (elite && !s->elite_orders) || !marker_grid_grow(&s->grid, 1))
         return pz_error(ctx, PZ_ERR_NOMEM, "marker: out of memory");
-    s->trial_order = s->order + n, s->scratch = s->order + 2 * n;
+    s->trial_order = s->order + 2 * n, s->scratch = s->order + 4 * n;
     s->random = 0x9e3779b97f4a7c15ull;
     s->work_scale = cells_across / FINAL_CELLS_ACROSS;
-    return build_demands(&s->grid.raster, pieces, demands, &s->count, s->best, ctx);
+    pz_status status = build_demands(&s->grid.raster, pieces, demands, &s->demand_count, s->best, ctx);
+    double area = 0.0;
+    for (int32_t i = 0; i < s->demand_count; ++i) {
+        s->count += demands[i].copies;
+        s->has_pairs |= demands[i].copies == 2;
+        const pz_piece *piece = &pieces->pieces[demands[i].piece];
+        area += demands[i].copies * piece->area_mm2;
+        s->shortest_possible = fmax(s->shortest_possible, piece->bbox_max[1] - piece->bbox_min[1]);
+    }
+    s->shortest_possible = fmax(s->shortest_possible, area / width_mm);
+    return status;
 }
 
 /* Frees what search_open made, s->best too unless `keep_best`. */
@@ -541,7 +608,7 @@ static pz_status search_both(const pz_pieces *pieces, double width_mm, double ga
         status = search_open(&coarse, pieces, width_mm, gap_mm, SEARCH_CELLS_ACROSS, 1, ctx);
     else
         coarse = (search){.pieces = pieces};
-    int coarse_usable = status == PZ_OK && coarse.count == fine.count;
+    int coarse_usable = status == PZ_OK && coarse.demand_count == fine.demand_count;
     if (status == PZ_OK)
         status = search_run(coarse_usable ? &coarse : &fine, ctx);
     if (status == PZ_OK && coarse_usable)
@@ -551,6 +618,7 @@ static pz_status search_both(const pz_pieces *pieces, double width_mm, double ga
     if (status == PZ_OK) {
         const search *kept = fine_wins ? &fine : &coarse;
         kept->best->passes = coarse.passes + fine.passes;
+        kept->best->shortest_possible_mm = fine.shortest_possible;
         *best = kept->best;
     }
     search_close(&coarse, status == PZ_OK && !fine_wins);
@@ -577,6 +645,8 @@ pz_status pz_marker_build(const pz_pieces *pieces, const pz_export_options *opti
     for (int32_t p = 0; p < marker->placement_count; ++p)
         area += pieces->pieces[marker->placements[p].piece].area_mm2;
     marker->efficiency = marker->length_mm > 0 ? area / (width_mm * marker->length_mm) : 0.0;
+    marker->efficiency_bound =
+        marker->shortest_possible_mm > 0 ? fmin(1.0, area / (width_mm * marker->shortest_possible_mm)) : 0.0;
     marker->ms = (pz_seconds() - start) * 1000.0;
     *out = marker;
     return PZ_OK;
@@ -600,13 +670,15 @@ cJSON *pz_marker_report_json(const pz_marker *marker)
     int ok = cJSON_AddNumberToObject(json, "length_mm", round(marker->length_mm * 10) / 10) &&
              cJSON_AddNumberToObject(json, "efficiency", round(marker->efficiency * 10000) / 10000) &&
              cJSON_AddNumberToObject(json, "fabric_width_mm", marker->fabric_width_mm) &&
+             cJSON_AddNumberToObject(json, "shortest_possible_mm", round(marker->shortest_possible_mm * 10) / 10) &&
+             cJSON_AddNumberToObject(json, "efficiency_bound", round(marker->efficiency_bound * 10000) / 10000) &&
              cJSON_AddNumberToObject(json, "pieces", marker->placement_count) &&
              cJSON_AddNumberToObject(json, "passes", marker->passes) &&
              cJSON_AddNumberToObject(json, "ms", round(marker->ms * 10) / 10) &&
              cJSON_AddStringToObject(json, "method",
                                      "raster bottom-left fill over true shapes, order search with restarts on "
-                                     "coarse cells, its best orders again on fine cells, column fill below the "
-                                     "best length, rotations 0/180");
+                                     "coarse cells (Cut-2 pairs kept or split), its best orders again on fine "
+                                     "cells, column fill below the best length, rotations 0/180");
     cJSON *unplaced = ok ? cJSON_AddArrayToObject(json, "unplaced") : NULL;
     ok = ok && unplaced;
     for (int32_t i = 0; ok && i < marker->unplaced_count; ++i)

@@ -2,15 +2,18 @@
  * export/marker_grid.c -- the marker's fabric grid and one greedy pass over
  * it (docs/marker.md): a unit goes to the lowest, then leftmost, grid
  * position where every run of its shape lies on free cells, in the rotation
- * whose top ends lowest. The fabric keeps, per cell, a signed stretch length
- * (the free cells from here rightwards, or minus the occupied ones): a run is
- * one lookup, and a blocked run says how far right the next candidate is, so
- * a fabric row costs O(obstacles in it), not O(width). Before a row is
+ * whose top ends lowest. The fabric is a bitmap, a bit per cell and 64 cells
+ * to a word: a run is checked a word at a time, and one that meets an
+ * occupied cell says how far right the next candidate is (past the occupied
+ * stretch it met: no position in between can work), so a fabric row costs
+ * O(obstacles in it), not O(width). Placing a shape sets its runs' bits and
+ * finds each touched row's longest free stretch again; a new pass clears the
+ * rows used (a 13 m marker on 2.25 mm cells: 0.5 MB). Before a row is
  * tried, eight probe rows of the shape must meet fabric rows with a long
  * enough free stretch; maxima over blocks of 32 rows let a probe skip a block
  * at once. A position is checked row by row in a strided order (widest row,
  * then every 64th, 32nd, ...): a blocked one is found blocked after a few
- * rows. Placing a shape mends only the stretches around its runs.
+ * rows.
  *
  * Separate from the search over orders (export/marker.c), which runs many
  * passes and only calls marker_nest_pass, and from the shapes
@@ -32,9 +35,14 @@
 void marker_grid_free(marker_grid *g)
 {
     free(g->occupied);
-    free(g->free_run);
     free(g->longest_run);
     free(g->block_longest);
+}
+
+/* The row's words: bit x % 64 of word x / 64 set when cell x is occupied. */
+static uint64_t *grid_row(const marker_grid *g, int32_t y)
+{
+    return g->occupied + (size_t)y * (size_t)g->words;
 }
 
 /* Rows [from, to) free again (from and to multiples of ROW_BLOCK, or to = from). */
@@ -42,13 +50,10 @@ static void grid_clear_rows(marker_grid *g, int32_t from, int32_t to)
 {
     for (int32_t b = from / ROW_BLOCK; b < (to + ROW_BLOCK - 1) / ROW_BLOCK; ++b)
         g->block_longest[b] = g->columns;
-    for (int32_t y = from; y < to; ++y) {
+    for (int32_t y = from; y < to; ++y)
         g->longest_run[y] = g->columns;
-        memset(g->occupied + (size_t)y * (size_t)g->columns, 0, (size_t)g->columns);
-        marker_stretch *run = g->free_run + (size_t)y * (size_t)g->columns;
-        for (int32_t x = 0; x < g->columns; ++x)
-            run[x] = (marker_stretch)(g->columns - x);
-    }
+    if (to > from)
+        memset(grid_row(g, from), 0, (size_t)(to - from) * (size_t)g->words * sizeof *g->occupied);
 }
 
 int marker_grid_grow(marker_grid *g, int32_t rows)
@@ -58,15 +63,11 @@ int marker_grid_grow(marker_grid *g, int32_t rows)
     int32_t new_rows = g->rows ? g->rows : 256;
     while (new_rows < rows)
         new_rows *= 2;
-    size_t cells = (size_t)new_rows * (size_t)g->columns;
-    uint8_t *occupied = realloc(g->occupied, cells);
+    g->words = (g->columns + 63) / 64;
+    uint64_t *occupied = realloc(g->occupied, (size_t)new_rows * (size_t)g->words * sizeof *occupied);
     if (!occupied)
         return 0;
     g->occupied = occupied;
-    marker_stretch *free_run = realloc(g->free_run, cells * sizeof(marker_stretch));
-    if (!free_run)
-        return 0;
-    g->free_run = free_run;
     int32_t *longest_run = realloc(g->longest_run, (size_t)new_rows * sizeof(int32_t));
     if (!longest_run)
         return 0;
@@ -87,79 +88,71 @@ static void grid_reset(marker_grid *g)
     g->dirty_rows = 0;
 }
 
-/* The last index below `before` whose byte is not `value`, or -1: eight bytes at a time (long free or occupied
- * stretches are the common case on a fabric row). */
-static int32_t last_byte_not(const uint8_t *row, int32_t before, uint8_t value)
+/* The first cell in [from, to] whose bit is `value` (1: occupied, 0: free), or to + 1: a word at a time. */
+static int32_t first_cell(const uint64_t *row, int32_t from, int32_t to, int value)
 {
-    const uint64_t all = 0x0101010101010101ull * value;
-    int32_t x = before;
-    while (x >= 8) {
-        uint64_t word;
-        memcpy(&word, row + x - 8, 8);
-        if (word != all)
-            break;
-        x -= 8;
+    const uint64_t flip = value ? 0 : ~0ull; /* look for set bits of word ^ flip */
+    int32_t w = from / 64;
+    uint64_t word = (row[w] ^ flip) & (~0ull << (from % 64));
+    for (;;) {
+        if (word) {
+            int32_t at = w * 64 + __builtin_ctzll(word);
+            return at <= to ? at : to + 1;
+        }
+        if (++w * 64 > to)
+            return to + 1;
+        word = row[w] ^ flip;
     }
-    while (--x >= 0 && row[x] == value) {
-    }
-    return x;
 }
 
-/*
- * Marks columns [first, last] of row y (free until now) occupied and mends
- * the stretch counts around them: cells in the run and to its left, back to
- * where the stretch that ends at the run began. The row's longest free
- * stretch is walked again (one step per stretch) only when the stretch the
- * run cut into was the longest. Cells right of the run keep their counts.
- */
-static void grid_fill_run(marker_grid *g, int32_t y, int32_t first, int32_t last)
+/* Sets cells [first, last] of the row. */
+static void set_cells(uint64_t *row, int32_t first, int32_t last)
 {
-    uint8_t *row = g->occupied + (size_t)y * (size_t)g->columns;
-    marker_stretch *run = g->free_run + (size_t)y * (size_t)g->columns;
-    int32_t start = last_byte_not(row, first, 0) + 1; /* the free stretch the run cuts into begins here */
-    int32_t cut = run[start];                         /* and was this long */
-    memset(row + first, 1, (size_t)(last - first + 1));
-    /* The occupied stretch through the run ends (exclusive) at `end`: an occupied cell counts -(end - x). */
-    int32_t end = last + 1;
-    if (end < g->columns && run[end] < 0)
-        end -= run[end];
-    for (int32_t x = first; x <= last; ++x)
-        run[x] = (marker_stretch)(x - end);
-    /* Left of the run: a free stretch now ends at `first`, or an occupied one grows. */
-    if (start < first)
-        for (int32_t x = start; x < first; ++x)
-            run[x] = (marker_stretch)(first - x);
-    else
-        for (int32_t x = last_byte_not(row, first, 1) + 1; x < first; ++x)
-            run[x] = (marker_stretch)(x - end);
-    if (cut < g->longest_run[y])
-        return; /* the longest stretch is elsewhere, untouched */
+    int32_t w0 = first / 64, w1 = last / 64;
+    uint64_t lo = ~0ull << (first % 64), hi = ~0ull >> (63 - last % 64);
+    if (w0 == w1) {
+        row[w0] |= lo & hi;
+        return;
+    }
+    row[w0] |= lo;
+    for (int32_t w = w0 + 1; w < w1; ++w)
+        row[w] = ~0ull;
+    row[w1] |= hi;
+}
+
+/* The longest stretch of free cells of row y (one step per stretch). */
+static int32_t row_longest(const marker_grid *g, int32_t y)
+{
+    const uint64_t *row = grid_row(g, y);
+    const int32_t last = g->columns - 1;
     int32_t longest = 0;
-    for (int32_t x = 0; x < g->columns; x += run[x] > 0 ? run[x] : -run[x])
-        longest = run[x] > longest ? run[x] : longest;
-    g->longest_run[y] = longest;
+    for (int32_t x = first_cell(row, 0, last, 0); x <= last;) {
+        int32_t end = first_cell(row, x, last, 1); /* free [x, end) */
+        longest = end - x > longest ? end - x : longest;
+        x = end > last ? end : first_cell(row, end, last, 0);
+    }
+    return longest;
 }
 
 /*
  * 0 when the shape fits with its cell (0, 0) at grid cell (x, y); else the
- * next column worth trying on this row. A run (a, b) whose first cell is
- * occupied moves past the occupied stretch; one whose free stretch ends
- * inside it moves past the stretch that blocks it (no position in between
- * can work). The widest row is tried first: it fails most often.
+ * next column worth trying on this row: a run (a, b) that meets an occupied
+ * cell moves past the occupied stretch it meets first (no position in
+ * between can work). Rows go in the shape's check order (the widest row
+ * first: it fails most often, then strided).
  */
 static int32_t grid_blocked(const marker_grid *g, const marker_shape *s, int32_t x, int32_t y)
 {
+    const int32_t last = g->columns - 1;
     for (int32_t k = 0; k < s->height; ++k) {
         int32_t r = s->check_order[k];
         if (y + r >= g->rows)
             continue; /* rows above the allocated ones are empty */
-        const marker_stretch *run = g->free_run + (size_t)(y + r) * (size_t)g->columns + x;
+        const uint64_t *row = grid_row(g, y + r);
         for (int32_t i = s->row_start[r]; i < s->row_start[r + 1]; ++i) {
-            int32_t first = s->runs[2 * i], stretch = run[first];
-            if (stretch <= 0)
-                return x - stretch;
-            if (stretch <= s->runs[2 * i + 1] - first)
-                return x + stretch - run[first + stretch];
+            int32_t first = x + s->runs[2 * i], blocked = first_cell(row, first, x + s->runs[2 * i + 1], 1);
+            if (blocked <= x + s->runs[2 * i + 1])
+                return first_cell(row, blocked, last, 0) - s->runs[2 * i];
         }
     }
     return 0;
@@ -224,13 +217,20 @@ static int grid_find(marker_grid *g, const marker_unit *u, int32_t *x_out, int32
     return 0; /* not reached: a free row takes any shape that fits across */
 }
 
+/* Marks the shape's cells at (x, y) occupied and updates the rows' longest free stretches and the blocks'. 0 when
+ * out of memory. */
 static int grid_occupy(marker_grid *g, const marker_shape *s, int32_t x, int32_t y)
 {
     if (!marker_grid_grow(g, y + s->height))
         return 0;
-    for (int32_t r = 0; r < s->height; ++r)
+    for (int32_t r = 0; r < s->height; ++r) {
+        if (s->row_start[r] == s->row_start[r + 1])
+            continue;
+        uint64_t *row = grid_row(g, y + r);
         for (int32_t i = s->row_start[r]; i < s->row_start[r + 1]; ++i)
-            grid_fill_run(g, y + r, x + s->runs[2 * i], x + s->runs[2 * i + 1]);
+            set_cells(row, x + s->runs[2 * i], x + s->runs[2 * i + 1]);
+        g->longest_run[y + r] = row_longest(g, y + r);
+    }
     for (int32_t b = y / ROW_BLOCK; b <= (y + s->height - 1) / ROW_BLOCK; ++b) {
         int32_t longest = 0;
         for (int32_t r = b * ROW_BLOCK; r < (b + 1) * ROW_BLOCK; ++r)
@@ -286,12 +286,29 @@ static int place_best(marker_grid *g, const marker_unit *candidates, int count, 
     return 1;
 }
 
+/* One copy of a piece on its own: the candidate of the pinned turn (1, 2) if it fits, else of either turn. *fitted
+ * = 0 when neither fits across the fabric. 0 when out of memory. */
+static int place_single(marker_grid *g, const marker_demand *d, int copy, int turn, pz_marker_placement *out,
+                        int32_t *out_count, marker_score *score, int *fitted)
+{
+    const int t = g->transposed;
+    int ok = 1;
+    *fitted = 0;
+    if (turn)
+        ok = place_best(g, d->singles[t][copy] + (turn - 1), 1, out, out_count, score, fitted);
+    if (ok && !*fitted)
+        ok = place_best(g, d->singles[t][copy], 2, out, out_count, score, fitted);
+    return ok;
+}
+
 /*
  * One greedy pass on grid g (the fabric, or its transpose for the column fill): placements into out (count
- * written, fabric coordinates either way). order[i] = demand * 3 + turn: turn 0 takes the candidate whose top
- * ends lowest, 1 and 2 the first or second half of the candidates only (copy 0 at 0 or 180 degrees) unless
- * none of those fits. On a transposed grid a unit that fits nowhere (taller than the length tried) ends the
- * pass with an infinite score.
+ * written, fabric coordinates either way). Each order entry is one copy of a piece (MARKER_ENTRY_* decode it): a
+ * Cut-2 piece has two entries. Paired (split bit clear), the pair goes at its copy 0's entry and copy 1's entry is
+ * passed over; split, each copy goes at its own entry. Turn 0 takes the candidate whose top ends lowest, 1 and 2
+ * the first or second half of the candidates only (copy 0 at 0 or 180 degrees; for a split copy, that copy)
+ * unless none of those fits. A pair that fits nowhere across the fabric goes as its two copies. On a transposed
+ * grid a unit that fits nowhere (taller than the length tried) ends the pass with an infinite score.
  */
 pz_status marker_nest_pass(marker_grid *g, const pz_pieces *pieces, const marker_demand *demands, const int32_t *order,
                            int32_t count, pz_marker_placement *out, int32_t *out_count, marker_score *score,
@@ -302,20 +319,22 @@ pz_status marker_nest_pass(marker_grid *g, const pz_pieces *pieces, const marker
     *score = (marker_score){0, 0, 0};
     const int t = g->transposed;
     for (int32_t i = 0; i < count; ++i) {
-        const marker_demand *d = &demands[order[i] / 3];
-        int turn = order[i] % 3, placed = 0, ok = 1;
-        if (d->copies == 2) {
+        const marker_demand *d = &demands[MARKER_ENTRY_DEMAND(order[i])];
+        int copy = MARKER_ENTRY_COPY(order[i]), turn = MARKER_ENTRY_TURN(order[i]), placed = 0, ok = 1;
+        int paired = d->copies == 2 && !MARKER_ENTRY_SPLIT(order[i]);
+        if (paired && copy == 1)
+            continue; /* placed with copy 0 */
+        if (paired) {
             if (turn)
                 ok = place_best(g, d->pairs[t] + 2 * (turn - 1), 2, out, out_count, score, &placed);
             if (ok && !placed)
                 ok = place_best(g, d->pairs[t], 4, out, out_count, score, &placed);
         }
-        for (int c = 0; ok && !placed && c < d->copies; ++c) {
+        /* split: this copy; paired but no pair fits across: both copies, each its best turn */
+        int first = paired ? 0 : copy, last = paired ? d->copies - 1 : copy;
+        for (int c = first; ok && !placed && c <= last; ++c) {
             int fitted = 0;
-            if (turn)
-                ok = place_best(g, d->singles[t][c] + (turn - 1), 1, out, out_count, score, &fitted);
-            if (ok && !fitted)
-                ok = place_best(g, d->singles[t][c], 2, out, out_count, score, &fitted);
+            ok = place_single(g, d, c, turn, out, out_count, score, &fitted);
             if (ok && !fitted && t) {
                 score->length = INFINITY; /* longer than the column fill's length: this length fails */
                 return PZ_OK;

@@ -33,42 +33,18 @@ static void shape_clear(marker_shape *s)
     memset(s, 0, sizeof *s);
 }
 
-/* The runs of a width x height cell bitmap. 0 when out of memory. */
-static int shape_from_cells(marker_shape *s, const uint8_t *cells, int32_t width, int32_t height)
+/* The shape's widest row, check order and probe rows, from its runs (row_start, runs, width, height set). */
+static void shape_finish(marker_shape *s)
 {
-    memset(s, 0, sizeof *s);
-    size_t count = 0;
-    for (size_t i = 0; i < (size_t)width * (size_t)height; ++i)
-        count += cells[i] && (i % (size_t)width == 0 || !cells[i - 1]);
-    s->width = width, s->height = height, s->widest = -1;
-    s->row_start = malloc(((size_t)height + 1) * sizeof(int32_t));
-    s->runs = malloc((2 * count + 1) * sizeof(int32_t));
-    s->check_order = malloc(((size_t)height + 1) * sizeof(int32_t));
-    if (!s->row_start || !s->runs || !s->check_order) {
-        shape_clear(s);
-        return 0;
-    }
-    int32_t run = 0;
-    for (int32_t y = 0; y < height; ++y) {
-        const uint8_t *row = cells + (size_t)y * (size_t)width;
-        s->row_start[y] = run;
-        for (int32_t x = 0; x < width; ++x) {
-            if (!row[x] || (x > 0 && row[x - 1]))
-                continue;
-            int32_t last = x;
-            while (last + 1 < width && row[last + 1])
-                ++last;
-            s->runs[2 * run] = x, s->runs[2 * run + 1] = last;
-            if (last - x > s->widest)
-                s->widest = last - x, s->widest_row = y;
-            ++run;
-        }
-    }
-    s->row_start[height] = run;
+    s->widest = -1, s->widest_row = 0;
+    for (int32_t y = 0; y < s->height; ++y)
+        for (int32_t i = s->row_start[y]; i < s->row_start[y + 1]; ++i)
+            if (s->runs[2 * i + 1] - s->runs[2 * i] > s->widest)
+                s->widest = s->runs[2 * i + 1] - s->runs[2 * i], s->widest_row = y;
     /* Check order: the widest row, then every 64th row, every 32nd, ... (each row once). An obstacle spans many
      * rows, so a blocked position is found blocked after a few rows instead of after a row-by-row walk from the
      * bottom: the answer is the same, found sooner. */
-    int32_t filled = 0;
+    int32_t filled = 0, height = s->height;
     if (height > 0)
         s->check_order[filled++] = s->widest_row;
     for (int32_t stride = 64; stride >= 1; stride /= 2)
@@ -82,17 +58,75 @@ static int shape_from_cells(marker_shape *s, const uint8_t *cells, int32_t width
             if (s->runs[2 * i + 1] - s->runs[2 * i] > s->probe_width[k])
                 s->probe_width[k] = s->runs[2 * i + 1] - s->runs[2 * i];
     }
+}
+
+/* The shape's arrays for `height` rows and `run_count` runs (width, height set). 0 when out of memory. */
+static int shape_allocate(marker_shape *s, int32_t width, int32_t height, size_t run_count)
+{
+    memset(s, 0, sizeof *s);
+    s->width = width, s->height = height, s->widest = -1;
+    s->row_start = malloc(((size_t)height + 1) * sizeof(int32_t));
+    s->runs = malloc((2 * run_count + 1) * sizeof(int32_t));
+    s->check_order = malloc(((size_t)height + 1) * sizeof(int32_t));
+    if (!s->row_start || !s->runs || !s->check_order) {
+        shape_clear(s);
+        return 0;
+    }
     return 1;
 }
 
-static double segment_distance(double px, double py, const double *a, const double *b)
+/* The first index in [x, width) whose byte is not `value` (0 or 1), or width: eight bytes at a time. */
+static int32_t next_byte_not(const uint8_t *row, int32_t x, int32_t width, uint8_t value)
+{
+    const uint64_t all = 0x0101010101010101ull * value;
+    for (uint64_t word; x + 8 <= width; x += 8) {
+        memcpy(&word, row + x, 8);
+        if (word != all)
+            break;
+    }
+    while (x < width && row[x] == value)
+        ++x;
+    return x;
+}
+
+/* The runs of a width x height cell bitmap (bytes 0 or 1). 0 when out of memory. */
+static int shape_from_cells(marker_shape *s, const uint8_t *cells, int32_t width, int32_t height)
+{
+    size_t count = 0;
+    for (int32_t y = 0; y < height; ++y) {
+        const uint8_t *row = cells + (size_t)y * (size_t)width;
+        for (int32_t x = next_byte_not(row, 0, width, 0); x < width; x = next_byte_not(row, x, width, 0)) {
+            x = next_byte_not(row, x, width, 1);
+            ++count;
+        }
+    }
+    if (!shape_allocate(s, width, height, count))
+        return 0;
+    int32_t run = 0;
+    for (int32_t y = 0; y < height; ++y) {
+        const uint8_t *row = cells + (size_t)y * (size_t)width;
+        s->row_start[y] = run;
+        for (int32_t x = next_byte_not(row, 0, width, 0); x < width; x = next_byte_not(row, x, width, 0)) {
+            int32_t end = next_byte_not(row, x, width, 1);
+            s->runs[2 * run] = x, s->runs[2 * run + 1] = end - 1;
+            ++run;
+            x = end;
+        }
+    }
+    s->row_start[height] = run;
+    shape_finish(s);
+    return 1;
+}
+
+/* The squared distance from (px, py) to segment ab. */
+static double segment_distance2(double px, double py, const double *a, const double *b)
 {
     double dx = b[0] - a[0], dy = b[1] - a[1];
     double length2 = dx * dx + dy * dy;
     double t = length2 > 0 ? ((px - a[0]) * dx + (py - a[1]) * dy) / length2 : 0.0;
     t = t < 0 ? 0 : t > 1 ? 1 : t;
     double ex = a[0] + t * dx - px, ey = a[1] + t * dy - py;
-    return sqrt(ex * ex + ey * ey);
+    return ex * ex + ey * ey;
 }
 
 /*
@@ -131,6 +165,7 @@ int marker_draw_polygon(uint8_t *cells, int32_t width, int32_t height, const dou
     }
     free(crossings);
     /* Near the outline: every cell within reach of an edge. */
+    const double reach2 = reach * reach;
     for (int32_t i = 0; i < n; ++i) {
         const double *a = &points[2 * i], *b = &points[2 * ((i + 1) % n)];
         int32_t x0 = (int32_t)floor((fmin(a[0], b[0]) - reach - origin[0]) / resolution);
@@ -140,8 +175,8 @@ int marker_draw_polygon(uint8_t *cells, int32_t width, int32_t height, const dou
         for (int32_t y = y0 < 0 ? 0 : y0; y <= y1 && y < height; ++y)
             for (int32_t x = x0 < 0 ? 0 : x0; x <= x1 && x < width; ++x) {
                 uint8_t *cell = &cells[(size_t)y * (size_t)width + (size_t)x];
-                if (!*cell && segment_distance(origin[0] + (x + 0.5) * resolution,
-                                               origin[1] + (y + 0.5) * resolution, a, b) <= reach)
+                if (!*cell && segment_distance2(origin[0] + (x + 0.5) * resolution,
+                                                origin[1] + (y + 0.5) * resolution, a, b) <= reach2)
                     *cell = 1;
             }
     }
@@ -235,13 +270,44 @@ static int32_t pair_shift(const marker_shape *left, const marker_shape *right)
     return shift;
 }
 
-/* Paints a shape's runs into a cell bitmap (width columns) at column offset `shift`. */
-static void paint_shape(uint8_t *cells, int32_t width, const marker_shape *s, int32_t shift)
+/* Appends run [first, last] to row `run` of the shape being built, joined to the run before when they touch (as
+ * the cells of both would read). */
+static void append_run(marker_shape *s, int32_t row_first_run, int32_t *run, int32_t first, int32_t last)
 {
-    for (int32_t y = 0; y < s->height; ++y)
-        for (int32_t i = s->row_start[y]; i < s->row_start[y + 1]; ++i)
-            memset(cells + (size_t)y * (size_t)width + (size_t)(s->runs[2 * i] + shift), 1,
-                   (size_t)(s->runs[2 * i + 1] - s->runs[2 * i] + 1));
+    if (*run > row_first_run && s->runs[2 * (*run - 1) + 1] + 1 >= first) {
+        if (last > s->runs[2 * (*run - 1) + 1])
+            s->runs[2 * (*run - 1) + 1] = last;
+        return;
+    }
+    s->runs[2 * *run] = first, s->runs[2 * *run + 1] = last;
+    ++*run;
+}
+
+/* The union of `left` and `right` moved right by `shift` cells (they share no cell), row by row: the two rows'
+ * runs merged in order of their first cell. 0 when out of memory. */
+static int shape_from_pair(marker_shape *s, const marker_shape *left, const marker_shape *right, int32_t shift,
+                           int32_t width, int32_t height)
+{
+    if (!shape_allocate(s, width, height, (size_t)left->row_start[left->height] + (size_t)right->row_start[right->height]))
+        return 0;
+    int32_t run = 0;
+    for (int32_t y = 0; y < height; ++y) {
+        s->row_start[y] = run;
+        int32_t i = y < left->height ? left->row_start[y] : 0, i_end = y < left->height ? left->row_start[y + 1] : 0;
+        int32_t j = y < right->height ? right->row_start[y] : 0, j_end = y < right->height ? right->row_start[y + 1] : 0;
+        while (i < i_end || j < j_end) {
+            if (j >= j_end || (i < i_end && left->runs[2 * i] <= right->runs[2 * j] + shift)) {
+                append_run(s, s->row_start[y], &run, left->runs[2 * i], left->runs[2 * i + 1]);
+                ++i;
+            } else {
+                append_run(s, s->row_start[y], &run, right->runs[2 * j] + shift, right->runs[2 * j + 1] + shift);
+                ++j;
+            }
+        }
+    }
+    s->row_start[height] = run;
+    shape_finish(s);
+    return 1;
 }
 
 /* The pair: `left` (copy 0) with `right` (copy 1, mirrored) pushed against its right side. 0 when out of memory. */
@@ -253,13 +319,7 @@ static int unit_pair(const marker_raster *raster, const marker_unit *left, const
         return 0;
     int32_t width = shift + right->shape.width > left->shape.width ? shift + right->shape.width : left->shape.width;
     int32_t height = left->shape.height > right->shape.height ? left->shape.height : right->shape.height;
-    uint8_t *cells = calloc((size_t)width * (size_t)height, 1);
-    if (!cells)
-        return 0;
-    paint_shape(cells, width, &left->shape, 0);
-    paint_shape(cells, width, &right->shape, shift);
-    int ok = shape_from_cells(&out->shape, cells, width, height);
-    free(cells);
+    int ok = shape_from_pair(&out->shape, &left->shape, &right->shape, shift, width, height);
     double shift_mm = shift * raster->resolution;
     out->member_count = 2;
     out->members[0] = left->members[0];

@@ -116,8 +116,8 @@ static inline void check_marker(const pz_pieces *pieces, const pz_marker *marker
     CHECK(too_close == 0, "%d pairs closer than the %.1f mm gap (closest %.3f)", (int)too_close, options->gap_mm,
           closest);
     /* Cut-2 pieces: the two copies are mirror images of each other (x -> c - x at the same rotation, y -> c - y
-     * when one is turned 180 degrees: the grain stays along y), placed as a pair: side by side, no farther
-     * apart than the gap and a few raster cells, unless the two are too wide for the fabric together. */
+     * when one is turned 180 degrees: the grain stays along y), side by side as a pair or each on its own (the
+     * search chooses). */
     for (int32_t i = 0; i < marker->placement_count; ++i)
         for (int32_t j = 0; j < marker->placement_count; ++j) {
             const pz_marker_placement *first = &marker->placements[i], *second = &marker->placements[j];
@@ -133,12 +133,6 @@ static inline void check_marker(const pz_pieces *pieces, const pz_marker *marker
                                          fabs(points[j][2 * k + 1 - mirror_axis] - points[i][2 * k + 1 - mirror_axis] -
                                               diff)));
             CHECK(worst < 1e-9, "%s: copies not mirror images (%g)", piece->name, worst);
-            double width = piece->bbox_max[0] - piece->bbox_min[0];
-            if (2 * width + options->gap_mm <= options->fabric_width_mm) {
-                double apart = polygon_distance(points[i], piece->cut_count, points[j], piece->cut_count);
-                CHECK(apart <= options->gap_mm + 10.0, "%s: the pair's copies are %.1f mm apart, not side by side",
-                      piece->name, apart);
-            }
         }
     for (int32_t i = 0; i < marker->placement_count; ++i)
         free(points[i]);
@@ -147,6 +141,17 @@ static inline void check_marker(const pz_pieces *pieces, const pz_marker *marker
     CHECK(fabs(marker->efficiency - area / (options->fabric_width_mm * top)) < 1e-12, "efficiency %g",
           marker->efficiency);
     CHECK(marker->efficiency > 0 && marker->efficiency <= 1, "efficiency %g", marker->efficiency);
+    /* What no nesting can pass: no marker is shorter than its tallest piece or its area over the width. */
+    double tallest = 0.0;
+    for (int32_t i = 0; i < marker->placement_count; ++i) {
+        const pz_piece *piece = &pieces->pieces[marker->placements[i].piece];
+        tallest = fmax(tallest, piece->bbox_max[1] - piece->bbox_min[1]);
+    }
+    CHECK(fabs(marker->shortest_possible_mm - fmax(tallest, area / options->fabric_width_mm)) < 1e-6 &&
+              marker->length_mm >= marker->shortest_possible_mm - 1e-9 &&
+              marker->efficiency <= marker->efficiency_bound + 1e-12,
+          "shortest possible %g (length %g), efficiency bound %g (efficiency %g)", marker->shortest_possible_mm,
+          marker->length_mm, marker->efficiency_bound, marker->efficiency);
 }
 
 #endif /* PZ_TEST_MARKER_CHECKS_H */

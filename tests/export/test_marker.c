@@ -3,10 +3,13 @@
  *  - 20 rectangles and L-shapes, some cut twice: the properties of
  *    marker_checks.h (every copy placed once, rotations 0 or 180 only,
  *    inside the fabric, no two cut lines closer than the gap, Cut-2 copies
- *    mirror images placed as pairs, length and efficiency recomputed), the
+ *    mirror images, length and efficiency recomputed), the
  *    same result twice (determinism);
  *  - L-shapes nest into each other's notch: efficiency above what their
  *    bounding boxes allow on a shelf;
+ *  - a Cut-2 pair that cannot sit beside a tall piece is split, its copies
+ *    one above the other; a marker as short as its tallest piece ends the
+ *    search;
  *  - concave star-like pieces of random sizes, some cut twice, on short
  *    markers where the column fill runs too: the marker properties;
  *  - a piece wider than the fabric, or with a NaN coordinate: PZ_ERR_DATA
@@ -151,6 +154,42 @@ static void test_nesting(void)
            marker->length_mm, box_area / 900.0, marker->efficiency, rotated);
     CHECK(marker->length_mm < box_area / 900.0, "no nesting: %g", marker->length_mm);
     CHECK(rotated > 0, "never used 180 degrees");
+    pz_marker_free(&marker);
+    fixture_pieces_free(pieces);
+}
+
+/* A Cut-2 piece whose pair leaves no room beside a tall piece: its copies go one above the other beside it (the
+ * search splits the pair), a marker near the tall piece's length; two pieces side by side at their height stop the
+ * search at once (no marker can be shorter than its tallest piece). */
+static void test_split_pairs(void)
+{
+    pz_pieces *pieces = fixture_pieces_alloc(2);
+    fixture_piece_box(&pieces->pieces[0], 0, "pocket", 440, 300, 0); /* cut lines 460 x 320 */
+    pieces->pieces[0].cut_quantity = 2;
+    fixture_piece_box(&pieces->pieces[1], 1, "back", 480, 600, 0); /* 500 x 620 */
+    pz_export_options options;
+    pz_export_options_default(&options);
+    options.fabric_width_mm = 1000;
+    options.gap_mm = 5;
+    pz_marker *marker = NULL;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    check_marker(pieces, marker, &options);
+    /* Paired: 460 + 5 + 460 beside 500 does not fit 1000, so 620 + 5 + 320 = 945 mm; split: 645 mm. */
+    printf("a pair beside a tall piece: length %.1f mm, efficiency %.3f, %d passes\n", marker->length_mm,
+           marker->efficiency, (int)marker->passes);
+    CHECK(marker->length_mm < 660, "the pair was not split: %.1f mm", marker->length_mm);
+    pz_marker_free(&marker);
+
+    fixture_piece_box(&pieces->pieces[0], 0, "front", 440, 600, 0);
+    pieces->pieces[0].cut_quantity = 1;
+    REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
+    check_marker(pieces, marker, &options);
+    CHECK(marker->length_mm < 620 + 2.25 + 1e-9, "side by side: %.1f mm", marker->length_mm);
+    CHECK(fabs(marker->shortest_possible_mm - 620) < 1e-6, "shortest possible %.3f mm", marker->shortest_possible_mm);
+    CHECK(marker->efficiency <= marker->efficiency_bound + 1e-12 &&
+              marker->efficiency > marker->efficiency_bound * 620 / (620 + 2.25 + 1e-6),
+          "efficiency %.4f, bound %.4f", marker->efficiency, marker->efficiency_bound);
+    CHECK(marker->passes <= 3, "%d passes after the shortest possible marker", (int)marker->passes);
     pz_marker_free(&marker);
     fixture_pieces_free(pieces);
 }
@@ -337,6 +376,7 @@ int main(void)
     test_twenty();
     test_garments();
     test_nesting();
+    test_split_pairs();
     test_random_shapes();
     test_too_wide();
     return test_finish();
