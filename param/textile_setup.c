@@ -747,6 +747,48 @@ void pz_textile_solver_free(pz_textile_solver **solver)
     *solver = NULL;
 }
 
+/*
+ * The LSCM start (solver->start_uv) and the state (its systems' symbolic analyses): independent of each other.
+ * One panel big enough for threads (state->parallel) has no panels to spread either over, so the two run side by
+ * side (the 200K-face hemisphere: its LSCM factorization beside the textile system's orderings); else one after the
+ * other, each spreading its panels over the threads. The same results either way. The state's part reports into a
+ * quiet context of its own (it has no notes), copied to ctx when it fails and the start did not.
+ */
+static pz_status start_and_state(pz_textile_solver *solver, pz_ctx *ctx)
+{
+    textile_state *state = &solver->state;
+    const pz_pattern *pattern = state->pattern;
+    if (!(state->parallel && pattern->panel_count == 1)) {
+        pz_status status = pz_param_lscm_pattern(pattern, state->grain, solver->start_uv, ctx);
+        if (!status)
+            status = pz_check_cancel(ctx, "textile");
+        if (!status)
+            status = pz_param_panel_faces(pattern, &state->offsets, &state->order, ctx);
+        if (!status)
+            status = state_setup(state, ctx);
+        return status;
+    }
+    pz_ctx state_ctx;
+    pz_ctx_quiet(ctx, &state_ctx);
+    pz_status started = PZ_OK, set_up = PZ_OK;
+#pragma omp parallel sections num_threads(2)
+    {
+#pragma omp section
+        started = pz_param_lscm_pattern(pattern, state->grain, solver->start_uv, ctx);
+#pragma omp section
+        {
+            set_up = pz_param_panel_faces(pattern, &state->offsets, &state->order, &state_ctx);
+            if (!set_up)
+                set_up = state_setup(state, &state_ctx);
+        }
+    }
+    if (started)
+        return started;
+    if (set_up)
+        return pz_error(ctx, set_up, "%s", state_ctx.error);
+    return pz_check_cancel(ctx, "textile");
+}
+
 pz_status pz_textile_setup(const pz_pattern *pattern, const pz_textile_options *options, pz_textile_solver **out,
                            pz_ctx *ctx)
 {
@@ -772,13 +814,7 @@ pz_status pz_textile_setup(const pz_pattern *pattern, const pz_textile_options *
     if (!status && !(solver->start_uv = malloc((size_t)pattern->mesh->vertex_count * 2 * sizeof(double) + 1)))
         status = pz_error(ctx, PZ_ERR_NOMEM, "textile: out of memory");
     if (!status)
-        status = pz_param_lscm_pattern(pattern, state->grain, solver->start_uv, ctx);
-    if (!status)
-        status = pz_check_cancel(ctx, "textile");
-    if (!status)
-        status = pz_param_panel_faces(pattern, &state->offsets, &state->order, ctx);
-    if (!status)
-        status = state_setup(state, ctx);
+        status = start_and_state(solver, ctx);
     if (status) {
         pz_textile_solver_free(&solver);
         return status;

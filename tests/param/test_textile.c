@@ -23,11 +23,15 @@
  *    shorter: the seam is found length-only, its sides end within a quarter
  *    of the seam-free mismatch, and the pieces are distorted far less than
  *    when the reflection is forced.
+ *  - a 110K-face hemisphere on two threads (its LSCM start beside its
+ *    systems' analyses, the iterations threaded) gives one thread's uv
+ *    byte for byte (skipped, saying so, when the load leaves no core free).
  * Patterns are built by hand (one panel = all faces) so the test does not
  * depend on pz_pattern_build; the fixtures are in textile_fixtures.h.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
+#define _DEFAULT_SOURCE /* getloadavg */
 #include "textile_fixtures.h"
 
 /* ------------------------------------------------------------------ helpers */
@@ -441,6 +445,31 @@ static void test_curved_seam(void)
     pattern_release(pattern);
 }
 
+/*
+ * One panel of 100K+ faces on two threads: the LSCM start and the systems' analyses run side by side, the
+ * iterations split their faces: the same uv as on one thread, byte for byte. Only when the load leaves a core free
+ * (pz_param_textile takes the spare cores only) is the threaded path taken: said when it is not.
+ */
+static void test_threads_same(void)
+{
+    double load[1];
+    if (getloadavg(load, 1) == 1 && load[0] > 1.0) {
+        test_skip_part("threads (load above 1: the threaded path would not be taken)");
+        return;
+    }
+    pz_pattern *pattern = pattern_of(generate(PZ_SHAPE_HEMISPHERE, 110000, 0), NULL, 1);
+    pz_textile_options one = {.threads = 1, .iterations = 3}, two = {.threads = 2, .iterations = 3};
+    pz_textile_result result_one, result_two;
+    double *uv_one = flatten(pattern, &one, &result_one), *uv_two = flatten(pattern, &two, &result_two);
+    size_t bytes = (size_t)pattern->mesh->vertex_count * 2 * sizeof(double);
+    printf("threads: %d faces, 1 thread set-up %.0f ms, 2 threads %.0f ms\n", (int)pattern->mesh->face_count,
+           result_one.init_ms, result_two.init_ms);
+    CHECK(memcmp(uv_one, uv_two, bytes) == 0, "two threads give another uv than one");
+    free(uv_one);
+    free(uv_two);
+    pattern_release(pattern);
+}
+
 int main(void)
 {
     pz_ctx_init(&ctx);
@@ -454,5 +483,6 @@ int main(void)
     test_bad_input();
     test_two_panels();
     test_curved_seam();
+    test_threads_same();
     return test_finish();
 }
