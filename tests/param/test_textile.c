@@ -25,7 +25,8 @@
  *    when the reflection is forced.
  *  - a 110K-face hemisphere on two threads (its LSCM start beside its
  *    systems' analyses, the iterations threaded) gives one thread's uv
- *    byte for byte (skipped, saying so, when the load leaves no core free).
+ *    byte for byte (both take one thread when the load leaves no core free:
+ *    printed).
  * Patterns are built by hand (one panel = all faces) so the test does not
  * depend on pz_pattern_build; the fixtures are in textile_fixtures.h.
  *
@@ -447,16 +448,15 @@ static void test_curved_seam(void)
 
 /*
  * One panel of 100K+ faces on two threads: the LSCM start and the systems' analyses run side by side, the
- * iterations split their faces: the same uv as on one thread, byte for byte. Only when the load leaves a core free
- * (pz_param_textile takes the spare cores only) is the threaded path taken: said when it is not.
+ * iterations split their faces: the same uv as on one thread, byte for byte. pz_param_textile takes the cores
+ * the load average leaves free only, so on a busy machine both runs take one thread: said, not skipped (the rest
+ * of this test ran).
  */
 static void test_threads_same(void)
 {
-    double load[1];
-    if (getloadavg(load, 1) == 1 && load[0] > 1.0) {
-        test_skip_part("threads (load above 1: the threaded path would not be taken)");
-        return;
-    }
+    double load[1] = {0};
+    if (getloadavg(load, 1) == 1 && load[0] > 1.0)
+        printf("threads: load %.2f, the two-thread run may take one thread\n", load[0]);
     pz_pattern *pattern = pattern_of(generate(PZ_SHAPE_HEMISPHERE, 110000, 0), NULL, 1);
     pz_textile_options one = {.threads = 1, .iterations = 3}, two = {.threads = 2, .iterations = 3};
     pz_textile_result result_one, result_two;
