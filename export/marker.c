@@ -50,9 +50,10 @@
  *  - Budgets are counted in grid_find's steps and in passes, not timed:
  *    deterministic, no threads, no clock, a fixed xorshift seed; a marker of
  *    many pieces on a long fabric gets fewer passes.
- * Memory: the shapes' runs (O(cells on their rows)), a bit per fabric cell. Fails with PZ_ERR_DATA for a piece wider than the fabric
- * or with a cut-line coordinate out of range, PZ_ERR_USAGE for a fabric
- * width out of range, PZ_ERR_NOMEM.
+ * Memory: the shapes' runs (O(cells on their rows)), a bit per fabric cell.
+ * Fails with PZ_ERR_DATA for a piece wider than the fabric or with a
+ * cut-line coordinate out of range, PZ_ERR_USAGE for a fabric width out of
+ * range, PZ_ERR_NOMEM.
  *
  * SPDX-License-Identifier: GPL-3.0-or-later
  */
@@ -111,12 +112,13 @@ void pz_marker_place_points(const pz_piece *piece, const pz_marker_placement *pl
 /* ------------------------------------------------------------------ the search over orders */
 
 /* The fixed orders: by area, height, width (decreasing), and by area with large and small pieces alternating; each
- * with the Cut-2 pieces paired and, when there are any, split (SPLIT_ORDERS). */
+ * with the Cut-2 pieces paired and, when there are any, split. */
 enum { kFixedOrders = 4 };
 
-/* The entries of the demands in `demands_in_order` (count of them), each demand's copies one after the other. */
-static int32_t entries_of(const marker_demand *demands, const int32_t *demands_in_order, int32_t count, int split,
-                          int32_t *order)
+/* The entries of the demands in `demands_in_order` (count of them) into order, each demand's copies one after the
+ * other, every Cut-2 piece split when `split`. */
+static void entries_of(const marker_demand *demands, const int32_t *demands_in_order, int32_t count, int split,
+                       int32_t *order)
 {
     int32_t entry_count = 0;
     for (int32_t i = 0; i < count; ++i) {
@@ -124,7 +126,6 @@ static int32_t entries_of(const marker_demand *demands, const int32_t *demands_i
         for (int c = 0; c < demands[d].copies; ++c)
             order[entry_count++] = MARKER_ENTRY(d, c, split && demands[d].copies == 2, 0);
     }
-    return entry_count;
 }
 
 /* Fixed order `which` (0 .. 2 kFixedOrders - 1: from kFixedOrders on, the same with every Cut-2 piece split) of
