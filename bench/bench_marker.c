@@ -14,9 +14,10 @@
  * `flatten` wrote (its garment.obj: panels and pattern from its vt), with the
  * default options or `--gap MM` (the figures of docs/marker.md).
  * One line per measurement:
- *   bench_marker case=... step=... ms=... [cpu_ms=... passes=... pieces=... length_mm=... efficiency=...] load=...
+ *   bench_marker case=... step=... ms=... [cpu_ms=... passes=... pieces=... length_mm=... efficiency=... bound=...] load=...
  * Timings are wall clock of one run, and for the marker also its CPU time
- * (cpu_ms: comparable under load, wall clock is not); the load is the
+ * (cpu_ms: comparable under load, wall clock is not), and bound= the
+ * efficiency no nesting of those pieces can pass (marker.efficiency_bound); the load is the
  * 1-minute load average (2 cores: wall clock taken above 1 is inflated).
  * PZ_BENCH_MARKER_SVG=DIR writes every marker as DIR/<case>.svg.
  * Usage: bench_marker [FACES] | bench_marker [--gap MM] PATTERN.obj...
@@ -47,9 +48,9 @@ static pz_marker *build_marker(const pz_pieces *pieces, const pz_export_options 
 static void print_marker(const char *name, const pz_pieces *pieces, const pz_marker *marker, double cpu_ms)
 {
     printf("bench_marker case=%s step=marker ms=%.1f cpu_ms=%.1f passes=%d pieces=%d placements=%d length_mm=%.1f "
-           "efficiency=%.4f load=%.2f\n",
+           "efficiency=%.4f bound=%.4f load=%.2f\n",
            name, marker->ms, cpu_ms, (int)marker->passes, (int)pieces->piece_count, (int)marker->placement_count,
-           marker->length_mm, marker->efficiency, bench_load_average());
+           marker->length_mm, marker->efficiency, marker->efficiency_bound, bench_load_average());
 }
 
 /* With PZ_BENCH_MARKER_SVG=DIR in the environment: DIR/<case>.svg, to look at the marker. */
