@@ -255,8 +255,8 @@ static void print_summary(const pz_cli_args *args, const pz_result *result, unsi
     printf("injective:          %s\n", injective ? "yes" : "no");
     printf("max seam mismatch:  %.6f\n", rest->max_seam_mismatch_rel);
     if (result->marker)
-        printf("marker:             %.1f mm long, efficiency %.1f%%\n", result->marker->length_mm,
-               100.0 * result->marker->efficiency);
+        printf("marker:             %.1f mm long, efficiency %.1f%% (at most %.1f%% for these pieces)\n",
+               result->marker->length_mm, 100.0 * result->marker->efficiency, 100.0 * result->marker->efficiency_bound);
     if (result->from_run) {
         const pz_verdict *verdict = &result->verdict;
         if (result->segment)

@@ -377,8 +377,11 @@ pz_status pz_export_write_report_html(FILE *file, const pz_export_inputs *inputs
     pz_xml_put_text(file, pieces->size_name);
     fprintf(file, "): %d pieces</h1>\n", (int)pieces->piece_count);
     if (inputs->marker)
-        fprintf(file, "<p>Marker: %.1f mm of fabric %.0f mm wide, efficiency %.1f %%.</p>\n",
-                inputs->marker->length_mm, inputs->marker->fabric_width_mm, 100 * inputs->marker->efficiency);
+        fprintf(file,
+                "<p>Marker: %.1f mm of fabric %.0f mm wide, efficiency %.1f %% (no nesting of these pieces on this "
+                "width passes %.1f %%: none is shorter than %.1f mm).</p>\n",
+                inputs->marker->length_mm, inputs->marker->fabric_width_mm, 100 * inputs->marker->efficiency,
+                100 * inputs->marker->efficiency_bound, inputs->marker->shortest_possible_mm);
     fputs("<h2>Strain on the pieces</h2>\n<p>Per triangle, the larger of warp and weft strain (pattern to "
           "garment stretch minus 1); dashed: sew line, solid: cut line.</p>\n",
           file);
