@@ -162,6 +162,7 @@ typedef struct nd_work {
     int32_t calls;
     int32_t *perm;
     int32_t filled;
+    int32_t *best_ids;                /* n, or NULL: scratch keeping the best split of a part so far */
 } nd_work;
 
 /* Reorders ids so that ids[0..k) have keys <= those of ids[k..m) (Hoare selection). */
@@ -236,7 +237,7 @@ static void nd_order(nd_work *w, int32_t *ids, int32_t m, int depth)
         }
     double longest = fmax(hi[0] - lo[0], fmax(hi[1] - lo[1], hi[2] - lo[2]));
     int best_axis = -1, last_axis = -1;
-    int32_t best_size = m + 1, inner = 0;
+    int32_t best_size = m + 1, inner = 0, best_inner = 0;
     for (int axis = 0; axis < 3; ++axis) {
         if (hi[axis] - lo[axis] < longest / 3)
             continue;
@@ -244,11 +245,17 @@ static void nd_order(nd_work *w, int32_t *ids, int32_t m, int depth)
         last_axis = axis;
         if (m / 2 - inner < best_size) {
             best_size = m / 2 - inner;
-            best_axis = axis;
+            best_axis = axis, best_inner = inner;
+            if (w->best_ids) /* kept: a later, worse split need not be redone */
+                memcpy(w->best_ids, ids, (size_t)m * sizeof *ids);
         }
     }
-    if (best_axis != last_axis)
-        inner = nd_split(w, ids, m, best_axis);
+    if (best_axis != last_axis) {
+        if (w->best_ids)
+            memcpy(ids, w->best_ids, (size_t)m * sizeof *ids), inner = best_inner;
+        else
+            inner = nd_split(w, ids, m, best_axis);
+    }
     int32_t half = m / 2;
     nd_order(w, ids, inner, depth + 1);
     nd_order(w, ids + half, m - half, depth + 1);
@@ -296,8 +303,10 @@ static int nested_dissection(const int *colp, const int *rows, int32_t n, const 
             ids[v] = v;
             mark[v] = 0;
         }
-        nd_work w = {start, adjacent, coords, mark, key, 0, perm, 0};
+        int32_t *best_ids = malloc(((size_t)n + 1) * sizeof(int32_t)); /* NULL: splits are redone instead */
+        nd_work w = {start, adjacent, coords, mark, key, 0, perm, 0, best_ids};
         nd_order(&w, ids, n, 0);
+        free(best_ids);
     }
     free(start);
     free(ids);
