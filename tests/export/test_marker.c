@@ -180,8 +180,10 @@ static void test_split_pairs(void)
     CHECK(marker->length_mm < 660, "the pair was not split: %.1f mm", marker->length_mm);
     pz_marker_free(&marker);
 
+    fixture_pieces_free(pieces);
+    pieces = fixture_pieces_alloc(2);
     fixture_piece_box(&pieces->pieces[0], 0, "front", 440, 600, 0);
-    pieces->pieces[0].cut_quantity = 1;
+    fixture_piece_box(&pieces->pieces[1], 1, "back", 480, 600, 0);
     REQUIRE_OK(pz_marker_build(pieces, &options, &marker, &ctx), ctx);
     check_marker(pieces, marker, &options);
     CHECK(marker->length_mm < 620 + 2.25 + 1e-9, "side by side: %.1f mm", marker->length_mm);
