@@ -70,6 +70,19 @@ void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const in
 cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions, const int32_t *vertex_of,
                                  int refactorized, cholmod_common *common);
 
+/* The symbolic analysis of a matrix whose unknown k is vertex vertex_of[k], in the order `vertex_rank` gives
+ * (vertex_rank[v]: when v was eliminated in an earlier factorization of the same mesh's adjacency, the LSCM
+ * start's; unknowns whose vertex has no rank, e.g. its pins, last): no ordering searched again. NULL when out of
+ * memory (common->status). */
+cholmod_factor *pz_param_analyze_ranked(cholmod_sparse *matrix, const int32_t *vertex_of, const int32_t *vertex_rank,
+                                        cholmod_common *common);
+
+/* pz_param_lscm_pattern, and for every panel whose LSCM system had at least PZ_METIS_MAX_UNKNOWNS unknowns, the
+ * elimination order its factorization used, per pattern vertex, into vertex_rank (nv; may be NULL; -1 for the
+ * others and for the pins): what pz_param_analyze_ranked reuses. */
+pz_status pz_param_lscm_pattern_ranked(const pz_pattern *pattern, const double grain[3], double *uv,
+                                       int32_t *vertex_rank, pz_ctx *ctx);
+
 /* cholmod_factorize with no OpenMP team (param/lscm.c says why). */
 int pz_param_factorize(cholmod_sparse *matrix, cholmod_factor *factor, cholmod_common *common);
 

@@ -386,6 +386,35 @@ cholmod_factor *pz_param_analyze(cholmod_sparse *matrix, const double *positions
     return cholmod_analyze(matrix, common);
 }
 
+cholmod_factor *pz_param_analyze_ranked(cholmod_sparse *matrix, const int32_t *vertex_of, const int32_t *vertex_rank,
+                                        cholmod_common *common)
+{
+    size_t n = matrix->ncol;
+    int32_t *perm = malloc(n * sizeof(int32_t) + 1);
+    int32_t *count = calloc(n + 2, sizeof(int32_t));
+    cholmod_factor *factor = NULL;
+    if (perm && count) {
+        /* Counting sort by rank (ranks below n; none: n, last). */
+        for (size_t k = 0; k < n; ++k) {
+            int32_t r = vertex_rank[vertex_of[k]];
+            ++count[(r >= 0 && (size_t)r < n ? (size_t)r : n) + 1];
+        }
+        for (size_t r = 0; r <= n; ++r)
+            count[r + 1] += count[r];
+        for (size_t k = 0; k < n; ++k) {
+            int32_t r = vertex_rank[vertex_of[k]];
+            perm[count[r >= 0 && (size_t)r < n ? (size_t)r : n]++] = (int32_t)k;
+        }
+        static const int given[1] = {CHOLMOD_GIVEN};
+        factor = analyze_with(matrix, perm, given, 1, common);
+    } else {
+        common->status = CHOLMOD_OUT_OF_MEMORY;
+    }
+    free(perm);
+    free(count);
+    return factor;
+}
+
 /*
  * cholmod_factorize with no OpenMP team. CHOLMOD 3 (SuiteSparse 5.12) opens
  * its supernodal factorization's parallel regions with a fixed
@@ -470,7 +499,8 @@ static pz_status pick_pins(const pz_mesh *disk, const pz_topology *topology, int
 
 /* Assembles and solves the pinned normal equations; writes uv of every
  * referenced vertex (unreferenced ones get 0). */
-static pz_status lscm_solve(const pz_mesh *disk, const int32_t pins[2], double *uv, pz_ctx *ctx)
+static pz_status lscm_solve(const pz_mesh *disk, const int32_t pins[2], double *uv, int32_t *vertex_rank,
+                            pz_ctx *ctx)
 {
     int32_t nv = disk->vertex_count, nf = disk->face_count;
     int32_t *unknown = malloc((size_t)nv * sizeof(int32_t));
@@ -555,6 +585,11 @@ static pz_status lscm_solve(const pz_mesh *disk, const int32_t pins[2], double *
         if (unknown[v] >= 0)
             vertex_of[unknown[v]] = v;
     factor = pz_param_analyze(matrix, disk->positions, vertex_of, 0, &common);
+    if (vertex_rank && factor && vertex_of && n >= PZ_METIS_MAX_UNKNOWNS) {
+        const int *perm = factor->Perm; /* perm[k]: the unknown eliminated k-th */
+        for (size_t k = 0; k < n; ++k)
+            vertex_rank[vertex_of[perm[k]]] = (int32_t)k;
+    }
     free(vertex_of);
     if (factor)
         pz_param_factorize(matrix, factor, &common);
@@ -620,7 +655,9 @@ static void normalize_piece(const pz_mesh *disk, double *uv)
     }
 }
 
-pz_status pz_param_lscm(const pz_mesh *disk, const double grain[3], double *uv, pz_ctx *ctx)
+/* pz_param_lscm, and into vertex_rank (nv, may be NULL, left as it is for small systems) the elimination order of
+ * its factorization when the system had at least PZ_METIS_MAX_UNKNOWNS unknowns. */
+static pz_status lscm_disk(const pz_mesh *disk, const double grain[3], double *uv, int32_t *vertex_rank, pz_ctx *ctx)
 {
     static const double up[3] = {0, 0, 1};
     if (!disk || !uv)
@@ -632,7 +669,7 @@ pz_status pz_param_lscm(const pz_mesh *disk, const double grain[3], double *uv, 
         status = pick_pins(disk, topology, pins, ctx);
     pz_topology_free(&topology);
     if (!status)
-        status = lscm_solve(disk, pins, uv, ctx);
+        status = lscm_solve(disk, pins, uv, vertex_rank, ctx);
     if (status)
         return status;
     normalize_piece(disk, uv);
@@ -648,6 +685,11 @@ pz_status pz_param_lscm(const pz_mesh *disk, const double grain[3], double *uv, 
         normalize_piece(disk, uv);
     }
     return PZ_OK;
+}
+
+pz_status pz_param_lscm(const pz_mesh *disk, const double grain[3], double *uv, pz_ctx *ctx)
+{
+    return lscm_disk(disk, grain, uv, NULL, ctx);
 }
 
 /* ------------------------------------------------------------------------ */
@@ -786,16 +828,20 @@ void pz_param_layout(const pz_pattern *pattern, const int32_t *offsets, const in
 
 /* LSCM of one panel written back into the pattern's uv. */
 static pz_status lscm_panel(const pz_pattern *pattern, int32_t panel, const int32_t *face_ids, int32_t count,
-                            const double grain[3], double *uv, pz_ctx *ctx)
+                            const double grain[3], double *uv, int32_t *vertex_rank, pz_ctx *ctx)
 {
     pz_mesh *piece = NULL;
-    int32_t *vertex_map = NULL;
+    int32_t *vertex_map = NULL, *piece_rank = NULL;
     double *piece_uv = NULL;
     pz_status status = pz_mesh_extract(pattern->mesh, face_ids, count, &piece, &vertex_map, NULL, ctx);
     if (!status && !(piece_uv = malloc((size_t)piece->vertex_count * 2 * sizeof(double))))
         status = pz_error(ctx, PZ_ERR_NOMEM, "lscm: out of memory");
+    if (!status && vertex_rank && !(piece_rank = malloc((size_t)piece->vertex_count * sizeof(int32_t))))
+        status = pz_error(ctx, PZ_ERR_NOMEM, "lscm: out of memory");
+    for (int32_t v = 0; piece_rank && v < piece->vertex_count; ++v)
+        piece_rank[v] = -1;
     if (!status) {
-        status = pz_param_lscm(piece, grain, piece_uv, ctx);
+        status = lscm_disk(piece, grain, piece_uv, piece_rank, ctx);
         if (status) {
             /* Say which panel: the message from pz_param_lscm is generic. */
             char inner[sizeof ctx->error];
@@ -807,7 +853,10 @@ static pz_status lscm_panel(const pz_pattern *pattern, int32_t panel, const int3
         for (int32_t v = 0; v < piece->vertex_count; ++v) {
             uv[2 * vertex_map[v]] = piece_uv[2 * v];
             uv[2 * vertex_map[v] + 1] = piece_uv[2 * v + 1];
+            if (piece_rank)
+                vertex_rank[vertex_map[v]] = piece_rank[v];
         }
+    free(piece_rank);
     free(piece_uv);
     free(vertex_map);
     pz_mesh_free(&piece);
@@ -816,8 +865,16 @@ static pz_status lscm_panel(const pz_pattern *pattern, int32_t panel, const int3
 
 pz_status pz_param_lscm_pattern(const pz_pattern *pattern, const double grain[3], double *uv, pz_ctx *ctx)
 {
+    return pz_param_lscm_pattern_ranked(pattern, grain, uv, NULL, ctx);
+}
+
+pz_status pz_param_lscm_pattern_ranked(const pz_pattern *pattern, const double grain[3], double *uv,
+                                       int32_t *vertex_rank, pz_ctx *ctx)
+{
     if (!pattern || !pattern->mesh || !uv)
         return pz_error(ctx, PZ_ERR_USAGE, "lscm: no pattern or no output");
+    for (int32_t v = 0; vertex_rank && v < pattern->mesh->vertex_count; ++v)
+        vertex_rank[v] = -1;
     int32_t *offsets = NULL, *order = NULL;
     pz_status status = pz_param_panel_faces(pattern, &offsets, &order, ctx);
     if (status)
@@ -831,7 +888,8 @@ pz_status pz_param_lscm_pattern(const pz_pattern *pattern, const double grain[3]
 #pragma omp parallel for schedule(dynamic, 1) if (pattern->panel_count > 1 && pattern->mesh->face_count >= 8192)
     for (int32_t p = 0; p < pattern->panel_count; ++p) {
         pz_ctx local = *ctx;
-        pz_status st = lscm_panel(pattern, p, order + offsets[p], offsets[p + 1] - offsets[p], grain, uv, &local);
+        pz_status st =
+            lscm_panel(pattern, p, order + offsets[p], offsets[p + 1] - offsets[p], grain, uv, vertex_rank, &local);
         if (st) {
 #pragma omp critical(pz_lscm_failure)
             if (p < failed_panel) {

@@ -246,6 +246,10 @@ typedef struct textile_state {
     double *areas;            /* face_count: rest 3D area */
     double *grain_local;      /* face_count x 2: the grain projected onto the rest face, in its frame */
     int32_t *vertex_panel;    /* vertex_count */
+    int32_t *vertex_rank;     /* vertex_count or NULL: the elimination order of the LSCM start's factorization of
+                               * panels of PZ_METIS_MAX_UNKNOWNS unknowns or more (-1 elsewhere), which their
+                               * systems reuse instead of searching orderings again (pz_param_analyze_ranked);
+                               * freed once they are analyzed */
     int32_t *vertex_local;    /* vertex_count: index within its panel */
     int32_t *offsets, *order; /* faces bucketed by panel */
     int32_t *outline_offsets; /* panel_count + 1: each panel's outline edges in outline_edges */
