@@ -92,14 +92,14 @@ static void grid_reset(marker_grid *g)
 static int32_t first_cell(const uint64_t *row, int32_t from, int32_t to, int value)
 {
     const uint64_t flip = value ? 0 : ~0ull; /* look for set bits of word ^ flip */
-    int32_t w = from / 64;
-    uint64_t word = (row[w] ^ flip) & (~0ull << (from % 64));
+    uint32_t w = (uint32_t)from >> 6; /* from >= 0: shifts, not signed divisions (the inner loop of the search) */
+    uint64_t word = (row[w] ^ flip) & (~0ull << ((uint32_t)from & 63));
     for (;;) {
         if (word) {
-            int32_t at = w * 64 + __builtin_ctzll(word);
+            int32_t at = (int32_t)(w << 6) + __builtin_ctzll(word);
             return at <= to ? at : to + 1;
         }
-        if (++w * 64 > to)
+        if ((int32_t)(++w << 6) > to)
             return to + 1;
         word = row[w] ^ flip;
     }
@@ -108,14 +108,14 @@ static int32_t first_cell(const uint64_t *row, int32_t from, int32_t to, int val
 /* Sets cells [first, last] of the row. */
 static void set_cells(uint64_t *row, int32_t first, int32_t last)
 {
-    int32_t w0 = first / 64, w1 = last / 64;
-    uint64_t lo = ~0ull << (first % 64), hi = ~0ull >> (63 - last % 64);
+    uint32_t w0 = (uint32_t)first >> 6, w1 = (uint32_t)last >> 6;
+    uint64_t lo = ~0ull << ((uint32_t)first & 63), hi = ~0ull >> (63 - ((uint32_t)last & 63));
     if (w0 == w1) {
         row[w0] |= lo & hi;
         return;
     }
     row[w0] |= lo;
-    for (int32_t w = w0 + 1; w < w1; ++w)
+    for (uint32_t w = w0 + 1; w < w1; ++w)
         row[w] = ~0ull;
     row[w1] |= hi;
 }
