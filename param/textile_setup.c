@@ -240,7 +240,11 @@ static pz_status panel_setup(textile_state *state, int32_t panel, char *message,
         /* A large panel reuses its LSCM start's ordering when it has one: the same adjacency (the textile system
          * adds the pins and seam segments), and the search for it (nested dissection and AMD) costs 0.2 s at
          * 100K unknowns. */
-        int ranked = state->vertex_rank && n >= PZ_METIS_MAX_UNKNOWNS && state->vertex_rank[system->vertices[0]] >= 0;
+        /* Ranked when the start's system was (the two pins have no rank: among any three vertices one is not a
+         * pin). */
+        int ranked = state->vertex_rank && n >= PZ_METIS_MAX_UNKNOWNS &&
+                     (state->vertex_rank[system->vertices[0]] >= 0 || state->vertex_rank[system->vertices[1]] >= 0 ||
+                      state->vertex_rank[system->vertices[2]] >= 0);
         system->symbolic = ranked ? pz_param_analyze_ranked(su->matrix, system->vertices, state->vertex_rank, &su->common)
                                   : pz_param_analyze(su->matrix, mesh->positions, system->vertices, !state->brief,
                                                      &su->common);
